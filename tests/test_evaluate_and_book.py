@@ -1,0 +1,76 @@
+"""Relative cost (section 4), exercise checks and the book's quick-mode switch."""
+
+import importlib
+
+import pytest
+import torch
+
+from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost
+from vgai_lite.controllers import potential_gradient
+from vgai_lite.exercises import check_flocking_cost, check_potential_gradient
+from vgai_lite.flocking import flocking_cost
+
+
+def test_the_expert_against_itself_costs_exactly_one():
+    cfg = FlockConfig(N=20, T=60)
+    res = relative_cost(ExpertController(cfg), cfg, episodes=6, seed=1, batch=4)
+    assert res.mean_ratio == pytest.approx(1.0) and res.median_ratio == pytest.approx(1.0)
+    assert torch.equal(res.safety.min_distance, res.expert_safety.min_distance)
+
+
+def test_local_heuristic_is_worse_than_the_centralized_expert():
+    cfg = FlockConfig()
+    res = relative_cost(LocalController(cfg), cfg, episodes=8, seed=0)
+    assert res.mean_ratio > 2.0        # the paper's upper bound: Local 4.13 at the defaults
+    lo, hi = res.mean_ratio_ci
+    assert lo <= res.mean_ratio <= hi
+    s = res.summary()
+    assert s["episodes"] == 8 and 0 <= s["share_below_0.1m"] <= 1
+    assert "relative cost" in str(res)
+
+
+def test_relative_cost_uses_the_same_initial_conditions_for_a_seed():
+    cfg = FlockConfig(N=20, T=40)
+    a = relative_cost(LocalController(cfg), cfg, episodes=4, seed=3)
+    b = relative_cost(LocalController(cfg), cfg, episodes=4, seed=3)
+    assert torch.equal(a.cost, b.cost) and torch.equal(a.expert_cost, b.expert_cost)
+
+
+def test_checks_pass_the_library_and_fail_wrong_answers_without_raising(capsys):
+    from vgai_lite.config import FlockConfig as C
+
+    assert check_potential_gradient(lambda r_ij, rho: potential_gradient(r_ij, C(rho=rho)))
+    wrong_sign = check_potential_gradient(lambda r_ij, rho: -potential_gradient(r_ij, C(rho=rho)))
+    assert not wrong_sign and "sign" in wrong_sign.message
+    no_cutoff = check_potential_gradient(lambda r_ij, rho: potential_gradient(r_ij, C(rho=100.0)))
+    assert not no_cutoff and "rho" in no_cutoff.message
+
+    def crashes(r_ij, rho):
+        raise KeyError("oops")
+
+    crashed = check_potential_gradient(crashes)
+    assert not crashed and "KeyError" in crashed.message
+
+    def unfinished(r_ij, rho):
+        raise NotImplementedError
+
+    assert "not implemented" in check_potential_gradient(unfinished).message
+    assert check_flocking_cost(flocking_cost)
+    avg = check_flocking_cost(lambda v: flocking_cost(v) / v.shape[0])
+    assert not avg and "sum over time" in avg.message
+    out = capsys.readouterr().out
+    assert "PASSED" in out and "NOT PASSED" in out
+
+
+def test_quick_mode_is_read_from_one_environment_variable(monkeypatch):
+    import vgai_lite.book as book
+
+    monkeypatch.setenv("VGAI_LITE_QUICK", "1")
+    assert importlib.reload(book).QUICK and book.pick(100, 2) == 2
+    monkeypatch.setenv("VGAI_LITE_QUICK", "0")
+    assert not importlib.reload(book).QUICK and book.pick(100, 2) == 100
+    monkeypatch.setenv("VGAI_LITE_QUICK", "maybe")
+    with pytest.raises(ValueError, match="VGAI_LITE_QUICK"):
+        importlib.reload(book)
+    monkeypatch.setenv("VGAI_LITE_QUICK", "1")
+    importlib.reload(book)

@@ -1,0 +1,151 @@
+"""Command line: ``python -m vgai_lite COMMAND``.
+
+  lab        open the book in JupyterLab (adds --allow-root when run as root)
+  evaluate   relative cost of a controller against the centralized expert (prints, optional JSON)
+  demo       headless: fly the expert and the local heuristic, print costs, save pictures
+  export     headless: execute every notebook and write it as HTML, to read without Jupyter
+  benchmark  agent-steps per second of the simulator
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+from .book import EVAL_SEED, ROOT
+
+
+def _cfg_from(args):
+    from .config import FlockConfig
+
+    changes = {k: getattr(args, k) for k in ("N", "R", "v_init", "T", "rho") if getattr(args, k, None) is not None}
+    return FlockConfig(**changes)
+
+
+def _add_cfg_args(p):
+    p.add_argument("--N", type=int, help="number of agents (default 50)")
+    p.add_argument("--R", type=float, help="communication radius in m (default 1.5)")
+    p.add_argument("--v-init", dest="v_init", type=float, help="initial velocity scale in m/s (default 3)")
+    p.add_argument("--T", type=int, help="steps per episode (default 200)")
+    p.add_argument("--rho", type=float, help="potential radius in m (default 0.5)")
+
+
+def cmd_lab(args, extra):
+    notebooks = ROOT / "notebooks"
+    cmd = ["jupyter", "lab", f"--notebook-dir={notebooks}", str(notebooks / "00_overview.ipynb")]
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        cmd.append("--allow-root")
+    cmd += extra
+    print("running:", " ".join(cmd), flush=True)
+    os.execvp(cmd[0], cmd)
+
+
+def cmd_evaluate(args, extra):
+    import torch
+
+    from .controllers import LocalController
+    from .evaluate import relative_cost
+
+    cfg = _cfg_from(args)
+    torch.manual_seed(0)
+    controllers = {"local": LocalController}
+    if args.controller not in controllers:
+        raise SystemExit(f"unknown controller {args.controller!r}; expected one of {sorted(controllers)}")
+    res = relative_cost(controllers[args.controller](cfg), cfg, episodes=args.episodes, seed=args.seed,
+                        device=args.device)
+    print(res)
+    if args.json:
+        out = {"config": cfg.to_dict(), **res.summary()}
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+        print("wrote", args.json)
+
+
+def cmd_demo(args, extra):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import torch
+
+    from .controllers import ExpertController, LocalController
+    from .flocking import rollout, sample_initial_state
+    from .viz import animate_swarms, plot_trajectories, plot_velocity_variance
+
+    cfg = _cfg_from(args)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    r0, v0 = sample_initial_state(cfg, args.episodes, torch.Generator().manual_seed(args.seed))
+    trajs = {c.name: rollout(c, cfg, r0, v0) for c in (ExpertController(cfg), LocalController(cfg))}
+    for name, tr in trajs.items():
+        print(f"{name:12s} mean cost {tr.cost.mean():8.2f}  "
+              f"(relative {tr.cost.mean() / trajs['Centralized'].cost.mean():.2f})")
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for ax, (name, tr) in zip(axes, trajs.items()):
+        plot_trajectories(ax, tr)
+        ax.set_title(f"{name}: paths of swarm 0")
+    plot_velocity_variance(axes[2], trajs, cfg.Ts)
+    fig.tight_layout()
+    fig.savefig(out / "demo.png", dpi=100)
+    (out / "demo_animation.html").write_text(animate_swarms(trajs, cfg).to_jshtml())
+    print("wrote", out / "demo.png", "and", out / "demo_animation.html")
+
+
+def cmd_export(args, extra):
+    import nbformat
+    from nbclient import NotebookClient
+    from nbconvert import HTMLExporter
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for path in sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")):
+        nb = nbformat.read(path, as_version=4)
+        if args.execute:
+            print("executing", path.name, flush=True)
+            NotebookClient(nb, timeout=3600, kernel_name="python3",
+                           resources={"metadata": {"path": str(path.parent)}}).execute()
+        html, _ = HTMLExporter().from_notebook_node(nb)
+        target = out / (path.stem + ".html")
+        target.write_text(html)
+        print("wrote", target)
+
+
+def cmd_benchmark(args, extra):
+    from . import benchmark
+
+    benchmark.main()
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m vgai_lite", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("lab", help="open the book in JupyterLab; other flags go to jupyter lab")
+    p = sub.add_parser("evaluate", help="relative cost of a controller against the expert")
+    p.add_argument("--controller", default="local", help="local (learned controllers come with notebook 03)")
+    p.add_argument("--episodes", type=int, default=50)
+    p.add_argument("--seed", type=int, default=EVAL_SEED, help=f"initial-condition seed (default {EVAL_SEED})")
+    p.add_argument("--device", default=None)
+    p.add_argument("--json", help="also write the figures to this JSON file")
+    _add_cfg_args(p)
+    p = sub.add_parser("demo", help="headless: expert vs local, pictures and an HTML animation")
+    p.add_argument("--episodes", type=int, default=20)
+    p.add_argument("--seed", type=int, default=EVAL_SEED)
+    p.add_argument("--out", default="out")
+    _add_cfg_args(p)
+    p = sub.add_parser("export", help="headless: write the notebooks as HTML pages")
+    p.add_argument("--out", default="out/html")
+    p.add_argument("--execute", action="store_true", help="run each notebook first (full mode: minutes)")
+    sub.add_parser("benchmark", help="agent-steps per second of step + expert_control")
+    args, extra = parser.parse_known_args(argv)
+    if extra and args.command != "lab":
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
+     "benchmark": cmd_benchmark}[args.command](args, extra)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

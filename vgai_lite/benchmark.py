@@ -1,0 +1,90 @@
+"""Throughput of the simulator: agent-steps per second of ``step`` + ``expert_control``.
+
+Run ``python -m vgai_lite benchmark``. An agent-step is one agent advanced by one time step with
+the expert's action computed. The unbatched numpy loop below is a plain one-swarm implementation of
+the same equations, written the way a per-swarm environment (such as gym-flock) computes them: it
+is the baseline the batched torch simulator is compared against on the same machine.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import torch
+
+from .config import FlockConfig
+from .controllers import expert_control
+from .flocking import sample_initial_state, step
+
+
+def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
+    """One swarm, state x = [r, v] of shape (N, 4): expert action, then one step (numpy)."""
+    diff = x[:, None, :] - x[None, :, :]
+    r2 = diff[:, :, 0] ** 2 + diff[:, :, 1] ** 2
+    np.fill_diagonal(r2, np.inf)
+    inside = r2 <= cfg.rho ** 2
+    w = np.where(inside, 2.0 / r2 ** 2 + 2.0 / r2, 0.0)
+    u = np.stack((-diff[:, :, 2].sum(1) + (w * diff[:, :, 0]).sum(1),
+                  -diff[:, :, 3].sum(1) + (w * diff[:, :, 1]).sum(1)), axis=1)
+    u = np.clip(u, -cfg.u_max, cfg.u_max)
+    out = x.copy()
+    out[:, :2] += x[:, 2:] * cfg.Ts + u * 0.5 * cfg.Ts ** 2
+    out[:, 2:] += u * cfg.Ts
+    return out
+
+
+def _time(fn, min_seconds: float) -> tuple[int, float]:
+    fn()  # warm-up
+    n, start = 0, time.perf_counter()
+    while True:
+        fn()
+        n += 1
+        elapsed = time.perf_counter() - start
+        if elapsed >= min_seconds:
+            return n, elapsed
+
+
+def run(N: int = 50, batches=(1, 256), steps: int = 20, min_seconds: float = 2.0,
+        dtype=torch.float32, device=None) -> list[dict]:
+    """Measure agent-steps/s for the numpy baseline and the torch simulator at each batch size."""
+    cfg = FlockConfig(N=N)
+    rows = []
+    r, v = sample_initial_state(cfg, 1, torch.Generator().manual_seed(0), dtype=torch.float64)
+    x0 = torch.cat((r[0], v[0]), dim=-1).numpy()
+
+    def numpy_run():
+        x = x0
+        for _ in range(steps):
+            x = _numpy_expert_step(x, cfg)
+
+    n, sec = _time(numpy_run, min_seconds)
+    rows.append({"impl": "numpy, one swarm (baseline)", "batch": 1, "N": N,
+                 "agent_steps_per_s": n * steps * N / sec})
+    for B in batches:
+        r, v = sample_initial_state(cfg, B, torch.Generator().manual_seed(1), dtype=dtype, device=device)
+
+        @torch.no_grad()
+        def torch_run():
+            rr, vv = r, v
+            for _ in range(steps):
+                rr, vv = step(rr, vv, expert_control(rr, vv, cfg), cfg)
+            if rr.is_cuda:
+                torch.cuda.synchronize()
+
+        n, sec = _time(torch_run, min_seconds)
+        rows.append({"impl": f"torch {str(dtype).replace('torch.', '')}", "batch": B, "N": N,
+                     "agent_steps_per_s": n * steps * N * B / sec})
+    base = rows[0]["agent_steps_per_s"]
+    for row in rows:
+        row["speedup_vs_baseline"] = row["agent_steps_per_s"] / base
+    return rows
+
+
+def main(args=None) -> None:
+    rows = run()
+    print(f"torch {torch.__version__}, {torch.get_num_threads()} threads")
+    print(f"{'implementation':32s} {'batch':>6s} {'N':>4s} {'agent-steps/s':>15s} {'vs baseline':>12s}")
+    for row in rows:
+        print(f"{row['impl']:32s} {row['batch']:6d} {row['N']:4d} {row['agent_steps_per_s']:15,.0f} "
+              f"{row['speedup_vs_baseline']:11.1f}x")

@@ -1,0 +1,126 @@
+"""The relative cost used in every table of the paper, with the safety figures eq. 1 ignores.
+
+Introduced in notebook 01. "Relative cost" is a controller's flocking cost (eq. 1) divided by the
+centralized expert's cost on the same initial conditions (paper, section 4: centralized = 1.00).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import torch
+
+from .config import FlockConfig
+from .controllers import ExpertController
+from .flocking import rollout, sample_initial_state
+
+CLOSE_CALLS = (0.05, 0.1)  # m: a pair closer than this counts as a close call
+
+
+@dataclass
+class SafetyFigures:
+    """Per-episode minimum pair distance (E,) and the summaries we report beside every cost."""
+
+    min_distance: torch.Tensor
+
+    @property
+    def median_min_distance(self) -> float:
+        return self.min_distance.median().item()
+
+    def share_below(self, threshold: float) -> float:
+        """Share of episodes in which some pair came closer than ``threshold`` metres."""
+        return (self.min_distance < threshold).double().mean().item()
+
+
+@dataclass
+class RelativeCost:
+    """A controller evaluated against the centralized expert on the same initial conditions.
+
+    Attributes:
+        cost, expert_cost: (E,) flocking cost of eq. 1 per episode.
+        safety, expert_safety: minimum pair distances per episode.
+        mean_ratio: mean(cost) / mean(expert_cost), the paper's relative cost.
+        median_ratio: median over episodes of cost / expert_cost.
+        ratio_quartiles: 25th and 75th percentiles of the per-episode ratios.
+        mean_ratio_ci: 95 % bootstrap interval of ``mean_ratio`` over episodes (2,000 resamples).
+    """
+
+    name: str
+    episodes: int
+    seed: int
+    cost: torch.Tensor
+    expert_cost: torch.Tensor
+    safety: SafetyFigures
+    expert_safety: SafetyFigures
+    mean_ratio: float = field(init=False)
+    median_ratio: float = field(init=False)
+    ratio_quartiles: tuple = field(init=False)
+    mean_ratio_ci: tuple = field(init=False)
+
+    def __post_init__(self) -> None:
+        ratio = self.cost / self.expert_cost
+        self.mean_ratio = (self.cost.mean() / self.expert_cost.mean()).item()
+        self.median_ratio = ratio.median().item()
+        q = torch.quantile(ratio.double(), torch.tensor([0.25, 0.75], dtype=torch.float64))
+        self.ratio_quartiles = (q[0].item(), q[1].item())
+        g = torch.Generator().manual_seed(self.seed)
+        idx = torch.randint(0, self.episodes, (2000, self.episodes), generator=g)
+        boot = self.cost.double()[idx].mean(1) / self.expert_cost.double()[idx].mean(1)
+        lo, hi = torch.quantile(boot, torch.tensor([0.025, 0.975], dtype=torch.float64))
+        self.mean_ratio_ci = (lo.item(), hi.item())
+
+    def summary(self) -> dict:
+        """Plain numbers, ready for JSON or a table row."""
+        out = {
+            "controller": self.name, "episodes": self.episodes, "seed": self.seed,
+            "relative_cost_mean": round(self.mean_ratio, 4),
+            "relative_cost_mean_ci95": [round(x, 4) for x in self.mean_ratio_ci],
+            "relative_cost_median": round(self.median_ratio, 4),
+            "relative_cost_quartiles": [round(x, 4) for x in self.ratio_quartiles],
+        }
+        for label, s in (("", self.safety), ("expert_", self.expert_safety)):
+            out[f"{label}median_min_distance"] = round(s.median_min_distance, 4)
+            for th in CLOSE_CALLS:
+                out[f"{label}share_below_{th}m"] = round(s.share_below(th), 4)
+        return out
+
+    def __str__(self) -> str:
+        lo, hi = self.mean_ratio_ci
+        q1, q3 = self.ratio_quartiles
+        s, e = self.safety, self.expert_safety
+        return (f"{self.name}: relative cost {self.mean_ratio:.2f} (95% CI {lo:.2f}-{hi:.2f}), "
+                f"median {self.median_ratio:.2f} (IQR {q1:.2f}-{q3:.2f}) over {self.episodes} "
+                f"episodes (seed {self.seed}); median min distance {s.median_min_distance:.3f} m "
+                f"(expert {e.median_min_distance:.3f} m); episodes with a pair < 0.05 m: "
+                f"{s.share_below(0.05):.0%} (expert {e.share_below(0.05):.0%}), < 0.1 m: "
+                f"{s.share_below(0.1):.0%} (expert {e.share_below(0.1):.0%})")
+
+
+def relative_cost(controller: Callable, cfg: FlockConfig, episodes: int = 50, seed: int = 0,
+                  batch: int = 64, device=None, dtype: torch.dtype = torch.float32,
+                  name: Optional[str] = None) -> RelativeCost:
+    """Evaluate ``controller`` against the centralized expert on ``episodes`` initial conditions.
+
+    The initial conditions come from ``sample_initial_state`` with ``torch.Generator`` seeded by
+    ``seed``: the same seed gives the same episodes for every controller. Episodes run ``batch`` at
+    a time (the controller is reset for each batch); each runs ``cfg.T`` steps.
+    """
+    if not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be a positive integer, got {episodes!r}")
+    g = torch.Generator().manual_seed(seed)
+    r0, v0 = sample_initial_state(cfg, episodes, g, dtype=dtype, device=device)
+    expert = ExpertController(cfg)
+    cost, ecost, dmin, edmin = [], [], [], []
+    for start in range(0, episodes, batch):
+        r, v = r0[start:start + batch], v0[start:start + batch]
+        te = rollout(expert, cfg, r, v)
+        tc = rollout(controller, cfg, r, v)
+        ecost.append(te.cost), cost.append(tc.cost)
+        edmin.append(te.min_distance.min(0).values), dmin.append(tc.min_distance.min(0).values)
+    name = name or getattr(controller, "name", None) or getattr(controller, "__name__", None) \
+        or type(controller).__name__
+    return RelativeCost(name=name, episodes=episodes, seed=seed,
+                        cost=torch.cat(cost).cpu(), expert_cost=torch.cat(ecost).cpu(),
+                        safety=SafetyFigures(torch.cat(dmin).cpu()),
+                        expert_safety=SafetyFigures(torch.cat(edmin).cpu()))

@@ -1,0 +1,123 @@
+"""Automatic checks for the book's exercises.
+
+Introduced in notebook 01. Each check takes the student's function, runs it on fresh random inputs
+against the library's own implementation, prints "passed" or what was expected on which input
+(never the solution's code), and returns a CheckResult. A check never raises: a crashing or wrong
+answer gives a message, not a broken notebook.
+"""
+
+from __future__ import annotations
+
+import os
+import traceback
+from dataclasses import dataclass
+from typing import Callable
+
+import torch
+
+from .config import FlockConfig
+from .controllers import potential_gradient
+from .flocking import flocking_cost
+
+
+@dataclass
+class CheckResult:
+    """The outcome of one exercise check; truthy when passed."""
+
+    exercise: str
+    passed: bool
+    message: str
+
+    def __bool__(self) -> bool:
+        return self.passed
+
+    def __str__(self) -> str:
+        mark = "PASSED" if self.passed else "NOT PASSED"
+        return f"[{mark}] {self.exercise}: {self.message}"
+
+
+def _fresh_generator() -> torch.Generator:
+    return torch.Generator().manual_seed(int.from_bytes(os.urandom(6), "little"))
+
+
+def _fmt(x: torch.Tensor) -> str:
+    return "[" + ", ".join(f"{float(a):.4g}" for a in x.flatten()) + "]"
+
+
+def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
+    try:
+        passed, message = body()
+    except NotImplementedError:
+        passed, message = False, "not implemented yet: replace the `raise NotImplementedError` with your code."
+    except Exception as exc:  # the student's code raised: report it, do not crash the notebook
+        tb = traceback.extract_tb(exc.__traceback__)[-1]
+        passed, message = False, (f"your function raised {type(exc).__name__}: {exc} "
+                                  f"(line {tb.lineno}: {tb.line!r})")
+    result = CheckResult(exercise, passed, message)
+    print(result)
+    return result
+
+
+def _as_tensor(got, shape, what: str) -> torch.Tensor:
+    if not isinstance(got, torch.Tensor):
+        raise TypeError(f"expected {what} as a torch.Tensor of shape {tuple(shape)}, "
+                        f"your function returned a {type(got).__name__}")
+    if tuple(got.shape) != tuple(shape):
+        raise ValueError(f"expected {what} of shape {tuple(shape)}, got shape {tuple(got.shape)}")
+    return got.detach().to(torch.float64)
+
+
+def check_potential_gradient(student_fn: Callable) -> CheckResult:
+    """Exercise 01.1: ``student_fn(r_ij, rho) -> grad_{r_i} U`` for offsets ``r_ij`` of shape (M, 2).
+
+    U is the paper's potential (eq. 3): 1/||r||^2 - log ||r||^2 inside rho, constant outside.
+    """
+    def body():
+        g = _fresh_generator()
+        rho = 0.3 + 0.7 * torch.rand((), generator=g, dtype=torch.float64).item()
+        M = 64
+        dist = rho * (0.1 + 1.4 * torch.rand(M, generator=g, dtype=torch.float64))
+        angle = 2 * torch.pi * torch.rand(M, generator=g, dtype=torch.float64)
+        r_ij = torch.stack((dist * angle.cos(), dist * angle.sin()), dim=-1)
+        expected = potential_gradient(r_ij, FlockConfig(rho=rho))
+        got = _as_tensor(student_fn(r_ij.clone(), rho), expected.shape, "the gradient")
+        err = (got - expected).norm(dim=-1)
+        tol = 1e-6 + 1e-5 * expected.norm(dim=-1)
+        if bool((err <= tol).all()):
+            return True, f"matches eq. 3's gradient on {M} random offsets (rho = {rho:.2f} m)."
+        k = int((err - tol).argmax())
+        hint = ""
+        if torch.allclose(got[k], -expected[k], rtol=1e-4):
+            hint = " Your sign is flipped: the gradient with respect to r_i, not r_j."
+        elif dist[k] > rho:
+            hint = " Beyond rho the potential is constant, so its gradient is zero."
+        elif torch.allclose(got[k], expected[k] * 2, rtol=1e-3) or torch.allclose(got[k], expected[k] / 2, rtol=1e-3):
+            hint = " Off by a factor of 2: d/dr ||r||^2 = 2 r."
+        return False, (f"at r_ij = {_fmt(r_ij[k])} (||r_ij|| = {dist[k]:.3f} m, rho = {rho:.2f} m) "
+                       f"expected {_fmt(expected[k])}, got {_fmt(got[k])}.{hint}")
+
+    return _run("potential gradient (eq. 3)", body)
+
+
+def check_flocking_cost(student_fn: Callable) -> CheckResult:
+    """Exercise 01.2: ``student_fn(v) -> cost`` for velocities (T, B, N, 2), returning (B,) (eq. 1)."""
+    def body():
+        g = _fresh_generator()
+        T, B, N = (int(x) for x in torch.randint(2, 12, (3,), generator=g))
+        v = 3 * torch.randn(T, B, N, 2, generator=g, dtype=torch.float64) + torch.randn(2, generator=g, dtype=torch.float64)
+        expected = flocking_cost(v)
+        got = _as_tensor(student_fn(v.clone()), expected.shape, "the cost per swarm")
+        if torch.allclose(got, expected, rtol=1e-6, atol=1e-9):
+            return True, f"matches eq. 1 on random trajectories (T={T}, B={B}, N={N})."
+        k = int((got - expected).abs().argmax())
+        ratio = (got[k] / expected[k]).item()
+        hint = ""
+        for factor, why in ((N, "divide the sum over agents by N (eq. 1 has 1/N)"),
+                            (1 / N, "1/N appears once, not twice"),
+                            (T, "sum over time, do not average"), (1 / T, "sum over time, do not average")):
+            if abs(ratio - factor) < 1e-6 * max(1.0, factor):
+                hint = f" Your value is {ratio:.4g} times the expected one: {why}."
+        return False, (f"for swarm b={k} of a random trajectory with T={T}, B={B}, N={N} expected "
+                       f"{expected[k].item():.6g}, got {got[k].item():.6g}.{hint}")
+
+    return _run("flocking cost (eq. 1)", body)

@@ -1,0 +1,127 @@
+"""Pictures of swarms: snapshots, trajectories, velocity variance over time, animations.
+
+Introduced in notebook 01. All functions take torch tensors (any device) and draw one swarm ``b``
+of a batch.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Optional
+
+import matplotlib.pyplot as plt
+import numpy as np
+import torch
+from matplotlib import animation
+from matplotlib.collections import LineCollection
+
+from .config import FlockConfig
+from .flocking import Trajectory
+
+
+def _np(x: torch.Tensor) -> np.ndarray:
+    return x.detach().cpu().double().numpy()
+
+
+def velocity_variance(v: torch.Tensor) -> torch.Tensor:
+    """The summand of eq. 1 at each step: (1/N) sum_i ||v_i(t) - vbar(t)||^2, (T, B, N, 2) -> (T, B)."""
+    return (v - v.mean(dim=2, keepdim=True)).square().sum(-1).mean(-1)
+
+
+def _links(r: np.ndarray, R: float) -> np.ndarray:
+    d = np.linalg.norm(r[:, None] - r[None], axis=-1)
+    i, j = np.nonzero(np.triu(d <= R, k=1))
+    return np.stack((r[i], r[j]), axis=1)
+
+
+def draw_swarm(ax, r: torch.Tensor, v: Optional[torch.Tensor] = None,
+               cfg: Optional[FlockConfig] = None, b: int = 0, links: bool = True,
+               color: str = "tab:blue", arrow_scale: float = 0.15):
+    """One swarm at one instant: agents as dots, velocities as arrows, links of length <= R.
+
+    r, v: (B, N, 2) or (N, 2).
+    """
+    r = _np(r[b] if r.ndim == 3 else r)
+    if links and cfg is not None:
+        ax.add_collection(LineCollection(_links(r, cfg.R), colors="0.8", linewidths=0.6, zorder=1))
+    ax.scatter(r[:, 0], r[:, 1], s=14, color=color, zorder=3)
+    if v is not None:
+        v = _np(v[b] if v.ndim == 3 else v)
+        ax.quiver(r[:, 0], r[:, 1], v[:, 0], v[:, 1], angles="xy", scale_units="xy",
+                  scale=1 / arrow_scale, width=0.004, color=color, alpha=0.7, zorder=2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return ax
+
+
+def plot_trajectories(ax, traj: Trajectory, b: int = 0, color: str = "tab:blue", every: int = 1):
+    """Each agent's path (faint), its start (open circle) and end (dot) for swarm ``b``."""
+    r = _np(traj.r[::every, b])  # (T, N, 2)
+    ax.add_collection(LineCollection(r.transpose(1, 0, 2), colors=color, linewidths=0.7, alpha=0.45))
+    ax.scatter(r[0, :, 0], r[0, :, 1], s=12, facecolors="none", edgecolors=color, linewidths=0.8)
+    ax.scatter(r[-1, :, 0], r[-1, :, 1], s=10, color=color)
+    ax.autoscale()
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return ax
+
+
+def plot_velocity_variance(ax, trajectories: Mapping[str, Trajectory], Ts: float, log: bool = True):
+    """Velocity variance (eq. 1's summand) over time: median over episodes, 10-90 % band."""
+    for name, traj in trajectories.items():
+        var = _np(velocity_variance(traj.v))  # (T, B)
+        t = np.arange(var.shape[0]) * Ts
+        lo, med, hi = np.percentile(var, [10, 50, 90], axis=1)
+        line, = ax.plot(t, med, label=name)
+        ax.fill_between(t, lo, hi, color=line.get_color(), alpha=0.2, linewidth=0)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(r"$\frac{1}{N}\sum_i \|v_i - \bar v\|^2$  [m$^2$/s$^2$]")
+    ax.legend()
+    return ax
+
+
+def animate_swarms(trajectories: Mapping[str, Trajectory], cfg: FlockConfig, b: int = 0,
+                   every: int = 5, tail: int = 20, size: float = 3.6, dpi: int = 72):
+    """Side-by-side animation of swarm ``b`` under each controller; returns a FuncAnimation.
+
+    Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``. ``every`` keeps one
+    frame in ``every`` steps; ``tail`` draws the last ``tail`` steps of each path.
+    """
+    names = list(trajectories)
+    fig, axes = plt.subplots(1, len(names), figsize=(size * len(names), size), dpi=dpi, squeeze=False)
+    axes = axes[0]
+    data = {n: _np(trajectories[n].r[:, b]) for n in names}
+    vel = {n: _np(trajectories[n].v[:, b]) for n in names}
+    T = min(d.shape[0] for d in data.values())
+    artists = []
+    for ax, n in zip(axes, names):
+        r = data[n]
+        lo, hi = r.reshape(-1, 2).min(0) - 0.5, r.reshape(-1, 2).max(0) + 0.5
+        ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_aspect("equal")
+        ax.set_xticks([]), ax.set_yticks([])
+        trails = LineCollection([], colors="tab:blue", linewidths=0.6, alpha=0.4)
+        links = LineCollection([], colors="0.8", linewidths=0.5)
+        ax.add_collection(links), ax.add_collection(trails)
+        dots = ax.scatter(r[0, :, 0], r[0, :, 1], s=10, color="tab:blue", zorder=3)
+        title = ax.set_title(n)
+        artists.append((n, trails, links, dots, title))
+    fig.tight_layout()
+
+    def draw(t):
+        out = []
+        for n, trails, links, dots, title in artists:
+            r = data[n]
+            trails.set_segments(r[max(0, t - tail):t + 1].transpose(1, 0, 2))
+            links.set_segments(_links(r[t], cfg.R))
+            dots.set_offsets(r[t])
+            spread = np.square(vel[n][t] - vel[n][t].mean(0)).sum(-1).mean()
+            title.set_text(f"{n}   t = {t * cfg.Ts:.2f} s   var = {spread:.2f}")
+            out += [trails, links, dots, title]
+        return out
+
+    anim = animation.FuncAnimation(fig, draw, frames=range(0, T, every), blit=False)
+    plt.close(fig)
+    return anim
