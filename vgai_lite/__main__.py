@@ -73,7 +73,7 @@ def cmd_demo(args, extra):
 
     from .controllers import ExpertController, LocalController
     from .flocking import rollout, sample_initial_state
-    from .viz import animate_swarms, plot_trajectories, plot_velocity_variance
+    from .viz import animate_swarms, animation_html, plot_trajectories, plot_velocity_variance
 
     cfg = _cfg_from(args)
     out = Path(args.out)
@@ -90,7 +90,7 @@ def cmd_demo(args, extra):
     plot_velocity_variance(axes[2], trajs, cfg.Ts)
     fig.tight_layout()
     fig.savefig(out / "demo.png", dpi=100)
-    (out / "demo_animation.html").write_text(animate_swarms(trajs, cfg).to_jshtml())
+    (out / "demo_animation.html").write_text(animation_html(animate_swarms(trajs, cfg)))
     print("wrote", out / "demo.png", "and", out / "demo_animation.html")
 
 

@@ -125,3 +125,11 @@ def animate_swarms(trajectories: Mapping[str, Trajectory], cfg: FlockConfig, b: 
     anim = animation.FuncAnimation(fig, draw, frames=range(0, T, every), blit=False)
     plt.close(fig)
     return anim
+
+
+def animation_html(anim: animation.FuncAnimation, frame_format: str = "jpeg", loop: bool = True) -> str:
+    """An animation as self-contained HTML with play controls (JPEG frames keep notebooks small)."""
+    import matplotlib
+
+    with matplotlib.rc_context({"animation.frame_format": frame_format}):
+        return anim.to_jshtml(default_mode="loop" if loop else "once")

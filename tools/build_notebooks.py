@@ -1,0 +1,93 @@
+"""Build the book's notebooks from their sources and execute them.
+
+The source of each notebook is a plain Python file in ``tools/notebooks/`` written in the "percent"
+format (``# %%`` starts a code cell, ``# %% [markdown]`` a markdown cell whose lines start with
+``# ``). This script turns each source into ``notebooks/NAME.ipynb`` and executes it in full mode so
+that the committed notebook shows its outputs:
+
+    python tools/build_notebooks.py                 # every notebook
+    python tools/build_notebooks.py 01              # the notebooks whose name starts with 01
+    python tools/build_notebooks.py --no-execute    # structure only, no outputs
+
+Edit the source, not the .ipynb, then rebuild: the two stay in step.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import nbformat
+from nbclient import NotebookClient
+
+ROOT = Path(__file__).resolve().parent.parent
+SOURCES = ROOT / "tools" / "notebooks"
+TARGET = ROOT / "notebooks"
+
+
+def parse(text: str) -> nbformat.NotebookNode:
+    """Percent-format Python -> a notebook with markdown and code cells."""
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    nb.metadata["language_info"] = {"name": "python"}
+    cells, kind, lines = [], None, []
+
+    def flush():
+        if kind is None:
+            return
+        body = "\n".join(lines).strip("\n")
+        if kind == "markdown":
+            body = "\n".join(l[2:] if l.startswith("# ") else l.lstrip("#") for l in body.splitlines())
+            cells.append(nbformat.v4.new_markdown_cell(body))
+        elif body.strip():
+            cells.append(nbformat.v4.new_code_cell(body))
+
+    for line in text.splitlines():
+        if line.startswith("# %%"):
+            flush()
+            kind, lines = ("markdown" if "[markdown]" in line else "code"), []
+        else:
+            lines.append(line)
+    flush()
+    nb.cells = cells
+    return nb
+
+
+def build(source: Path, execute: bool) -> Path:
+    nb = parse(source.read_text())
+    target = TARGET / (source.stem + ".ipynb")
+    if execute:
+        env_quick = os.environ.pop("VGAI_LITE_QUICK", None)  # committed notebooks run in full mode
+        start = time.time()
+        try:
+            NotebookClient(nb, timeout=3600, kernel_name="python3",
+                           resources={"metadata": {"path": str(TARGET)}}).execute()
+        finally:
+            if env_quick is not None:
+                os.environ["VGAI_LITE_QUICK"] = env_quick
+        print(f"executed {source.stem} in {time.time() - start:.0f} s")
+    nbformat.write(nb, target)
+    return target
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("prefixes", nargs="*", help="build only notebooks whose name starts with one of these")
+    p.add_argument("--no-execute", action="store_true")
+    args = p.parse_args(argv)
+    sources = sorted(SOURCES.glob("[0-9][0-9]_*.py"))
+    if args.prefixes:
+        sources = [s for s in sources if any(s.stem.startswith(x) for x in args.prefixes)]
+    if not sources:
+        print("no notebook sources match", args.prefixes, file=sys.stderr)
+        return 1
+    for s in sources:
+        print("wrote", build(s, execute=not args.no_execute).relative_to(ROOT))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
