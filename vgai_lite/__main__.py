@@ -35,12 +35,13 @@ def _add_cfg_args(p):
 
 def cmd_lab(args, extra):
     notebooks = ROOT / "notebooks"
-    cmd = ["jupyter", "lab", f"--notebook-dir={notebooks}", str(notebooks / "00_overview.ipynb")]
+    cmd = [sys.executable, "-m", "jupyter", "lab", f"--notebook-dir={notebooks}",
+           str(notebooks / "00_overview.ipynb")]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         cmd.append("--allow-root")
     cmd += extra
     print("running:", " ".join(cmd), flush=True)
-    os.execvp(cmd[0], cmd)
+    os.execv(cmd[0], cmd)
 
 
 def cmd_evaluate(args, extra):

@@ -1,4 +1,4 @@
-"""Test-suite set-up: the book runs in quick mode under test (notebooks included).
+"""Test-suite set-up (repository root, so it applies to tests/ and notebooks/ alike): quick mode.
 
 The variable is set before any notebook kernel starts, so nbval's kernels inherit it.
 """
