@@ -64,7 +64,8 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
     FlockConfig); each agent's velocity is uniform in [-v_init, v_init]^2 plus one flock-wide bias
     uniform in [-0.3 v_init, 0.3 v_init]^2. A candidate is rejected (and redrawn) while any agent
     has fewer than ``cfg.min_neighbours`` neighbours within R or any pair is closer than
-    ``cfg.min_init_distance``. Candidates are drawn ``chunk`` at a time, in float64 on the CPU from
+    ``cfg.min_init_distance`` (with ``cfg.init_method == "repair"`` the too-close agents are
+    redrawn first, see FlockConfig). Candidates are drawn ``chunk`` at a time, in float64 on the CPU from
     ``generator``, so the result depends only on the generator's seed, not on device or dtype.
 
     Returns:
@@ -83,14 +84,15 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
     while accepted < batch:
         if tried > cfg.max_init_tries * (accepted + 1):
             raise RuntimeError(
-                f"sample_initial_state: {tried} candidate swarms drawn, {accepted} of {batch} met the "
+                f"sample_initial_state ({cfg.init_method!r}): {tried} candidate swarms drawn, {accepted} of {batch} met the "
                 f"constraints (every agent >= {cfg.min_neighbours} neighbours within R = {cfg.R} m, "
                 f"no pair closer than {cfg.min_init_distance} m on a disc of radius "
-                f"{cfg.init_radius:.2f} m). Make R larger, the disc smaller (init_radius_exponent) "
-                f"or the constraints looser.")
-        radius = cfg.init_radius * torch.rand(chunk, N, generator=generator, dtype=torch.float64).sqrt()
-        angle = 2 * math.pi * torch.rand(chunk, N, generator=generator, dtype=torch.float64)
-        pos = torch.stack((radius * angle.cos(), radius * angle.sin()), dim=-1)
+                f"{cfg.init_radius:.2f} m). Make R larger, the disc smaller (init_radius_exponent), "
+                f"the constraints looser, or use init_method='repair' for large teams.")
+        count = chunk if cfg.init_method == "reject" else min(chunk, 2 * (batch - accepted) + 2)
+        pos = _disc(cfg, count, generator)
+        if cfg.init_method == "repair":
+            pos = _repair(pos, cfg, generator)
         # Screen cheaply in float32 with a small margin, then check the few survivors exactly.
         pos32 = pos.float()
         dist = torch.cdist(pos32, pos32)
@@ -101,7 +103,7 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
         _, _, d2 = pairwise_offsets(pos)
         ok = (d2.flatten(1).min(dim=1).values >= dmin2) & \
              ((d2 <= R2).sum(dim=-1).min(dim=-1).values >= cfg.min_neighbours)
-        tried += chunk
+        tried += count
         good = pos[ok][: batch - accepted]
         if len(good):
             k = len(good)
@@ -114,6 +116,28 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
     r = torch.cat(rs).to(dtype=dtype, device=device)
     v = torch.cat(vs).to(dtype=dtype, device=device)
     return r, v
+
+
+def _disc(cfg: FlockConfig, count: int, generator: torch.Generator) -> torch.Tensor:
+    """``count`` swarms of N positions uniform on the disc of radius cfg.init_radius (float64)."""
+    radius = cfg.init_radius * torch.rand(count, cfg.N, generator=generator, dtype=torch.float64).sqrt()
+    angle = 2 * math.pi * torch.rand(count, cfg.N, generator=generator, dtype=torch.float64)
+    return torch.stack((radius * angle.cos(), radius * angle.sin()), dim=-1)
+
+
+def _repair(pos: torch.Tensor, cfg: FlockConfig, generator: torch.Generator, max_rounds: int = 1000
+            ) -> torch.Tensor:
+    """Redraw, uniformly on the disc, every agent closer than min_init_distance to a lower-numbered
+    agent, until no pair is too close (init_method="repair")."""
+    dmin2 = cfg.min_init_distance ** 2
+    for _ in range(max_rounds):
+        _, _, d2 = pairwise_offsets(pos)
+        bad = torch.tril(d2 < dmin2, diagonal=-1).any(dim=-1)  # (C, N): too close to an earlier agent
+        if not bad.any():
+            break
+        fresh = _disc(cfg, pos.shape[0], generator)
+        pos = torch.where(bad.unsqueeze(-1), fresh, pos)
+    return pos
 
 
 def saturate(u: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
