@@ -5,6 +5,7 @@
   demo       headless: fly the expert and the local heuristic, print costs, save pictures
   export     headless: execute every notebook and write it as HTML, to read without Jupyter
   benchmark  agent-steps per second of the simulator
+  train-dagnn  train (or load) the book's DAGNN baselines, evaluate them, write data/dagnn/
 """
 
 from __future__ import annotations
@@ -114,6 +115,21 @@ def cmd_export(args, extra):
         print("wrote", target)
 
 
+def cmd_train_dagnn(args, extra):
+    import torch
+
+    from .imitation import BOOK_RUNS, book_run
+
+    names = sorted(BOOK_RUNS) if args.all else args.names
+    if not names:
+        raise SystemExit(f"name one or more runs, or --all; the book's runs are {sorted(BOOK_RUNS)}")
+    torch.set_num_threads(args.threads)
+    for name in names:
+        controller, result = book_run(name, retrain=args.retrain, episodes=args.episodes)
+        print(result)
+        print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote data/dagnn/{name}.pt and .json")
+
+
 def cmd_benchmark(args, extra):
     from . import benchmark
 
@@ -141,11 +157,17 @@ def main(argv=None):
     p.add_argument("--out", default="out/html")
     p.add_argument("--execute", action="store_true", help="run each notebook first (full mode: minutes)")
     sub.add_parser("benchmark", help="agent-steps per second of step + expert_control")
+    p = sub.add_parser("train-dagnn", help="train (or load) the book's DAGNNs, evaluate, write data/dagnn/")
+    p.add_argument("names", nargs="*", help="runs to train, e.g. dagnn_K4")
+    p.add_argument("--all", action="store_true", help="every run the book ships")
+    p.add_argument("--retrain", action="store_true", help="train even if an up-to-date checkpoint exists")
+    p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
+    p.add_argument("--threads", type=int, default=1, help="torch threads (run two jobs on two cores)")
     args, extra = parser.parse_known_args(argv)
     if extra and args.command != "lab":
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
-     "benchmark": cmd_benchmark}[args.command](args, extra)
+     "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn}[args.command](args, extra)
 
 
 if __name__ == "__main__":

@@ -66,19 +66,22 @@ def expert_control(r: torch.Tensor, v: torch.Tensor, cfg: FlockConfig) -> torch.
     return saturate(align + _repulsion(dx, dy, d2, d2 <= cfg.rho ** 2, cfg), cfg)
 
 
-def local_control(r: torch.Tensor, v: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
+def local_control(r: torch.Tensor, v: torch.Tensor, cfg: FlockConfig,
+                  alignment_gain: float = 1.0, repulsion_gain: float = 1.0) -> torch.Tensor:
     """The local heuristic (the equation after eq. 3): eq. 2 with both sums over N_i(t) only.
 
     u~_i = -sum_{j in N_i} (v_i - v_j) - sum_{j in N_i} grad_{r_i} U(r_i, r_j),
     N_i(t) = { j != i : ||r_i - r_j|| <= R }: present, one-hop information only.
+    ``alignment_gain`` and ``repulsion_gain`` multiply the two sums (1 and 1 in the paper; notebook
+    03 shows what other gains do to the cost and to collisions).
     Args: r, v: (B, N, 2). Returns: (B, N, 2), saturated per axis.
     """
     check_state(r, v)
     dx, dy, d2 = pairwise_offsets(r)
     A = (d2 <= cfg.R ** 2).to(v.dtype)  # (B, N, N) adjacency, no self-loops
-    align = A @ v - A.sum(dim=-1, keepdim=True) * v
+    align = alignment_gain * (A @ v - A.sum(dim=-1, keepdim=True) * v)
     near = (d2 <= min(cfg.rho, cfg.R) ** 2)
-    return saturate(align + _repulsion(dx, dy, d2, near, cfg), cfg)
+    return saturate(align + repulsion_gain * _repulsion(dx, dy, d2, near, cfg), cfg)
 
 
 class ExpertController:
@@ -99,13 +102,14 @@ class ExpertController:
 class LocalController:
     """The local heuristic as a controller: ``LocalController(cfg)(r, v) -> u``."""
 
-    name = "Local"
-
-    def __init__(self, cfg: FlockConfig):
-        self.cfg = cfg
+    def __init__(self, cfg: FlockConfig, alignment_gain: float = 1.0, repulsion_gain: float = 1.0):
+        self.cfg, self.alignment_gain, self.repulsion_gain = cfg, alignment_gain, repulsion_gain
+        gains = (alignment_gain, repulsion_gain)
+        self.name = "Local" if gains == (1.0, 1.0) else f"Local (gains {alignment_gain:g}, {repulsion_gain:g})"
 
     def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        return local_control(r, v, self.cfg)
+        return local_control(r, v, self.cfg, self.alignment_gain, self.repulsion_gain)
 
     def __repr__(self) -> str:
-        return f"LocalController(R={self.cfg.R}, rho={self.cfg.rho})"
+        return (f"LocalController(R={self.cfg.R}, rho={self.cfg.rho}, alignment_gain={self.alignment_gain}, "
+                f"repulsion_gain={self.repulsion_gain})")

@@ -121,3 +121,75 @@ def check_flocking_cost(student_fn: Callable) -> CheckResult:
                        f"{expected[k].item():.6g}, got {got[k].item():.6g}.{hint}")
 
     return _run("flocking cost (eq. 1)", body)
+
+
+def _random_swarm_sequence(g: torch.Generator, T: int, N: int):
+    """A short random walk of one swarm, dense enough to have links: r (T, N, 2)."""
+    r = torch.rand(1, N, 2, generator=g, dtype=torch.float64) * (N ** 0.5) * 0.6
+    steps = 0.1 * torch.randn(T, 1, N, 2, generator=g, dtype=torch.float64)
+    return (r + steps.cumsum(0))[:, 0]
+
+
+def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
+    """Exercise 02.1: ``student_fn(X, S, K) -> Z(t)`` at the last time t = T-1 of a window.
+
+    X (T, N, F) features and S (T, N, N) GSOs at times 0 ... T-1 of one swarm (nothing before 0);
+    return Z(T-1) of shape (N, K, F): block k = S(t) S(t-1) ... S(t-k+1) X(t-k) (eq. 6).
+    """
+    from .aggregation import aggregation_sequence
+    from .graphs import adjacency, gso
+
+    def body():
+        g = _fresh_generator()
+        T, N, F = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(6, 15, (1,), generator=g)), 3
+        K = int(torch.randint(2, T + 1, (1,), generator=g))
+        r = _random_swarm_sequence(g, T, N)
+        S = gso(adjacency(r, 1.5))
+        X = torch.randn(T, N, F, generator=g, dtype=torch.float64)
+        expected = aggregation_sequence(X[None], S[None], K)[0, -1]
+        got = _as_tensor(student_fn(X.clone(), S.clone(), K), expected.shape, "Z(t)")
+        if torch.allclose(got, expected, rtol=1e-6, atol=1e-9):
+            return True, f"matches eq. 6 on a random window (T={T}, N={N}, F={F}, K={K})."
+        bad = [k for k in range(K) if not torch.allclose(got[:, k], expected[:, k], rtol=1e-6, atol=1e-9)]
+        k = bad[0]
+        hint = ""
+        if k == 0:
+            hint = " Block 0 is the agents' own current features X(t)."
+        elif torch.allclose(got[:, k], torch.linalg.matrix_power(S[-1], k) @ X[-1 - k], rtol=1e-6):
+            hint = (" You used S(t)^k; the graph changes over time: block k uses "
+                    "S(t) S(t-1) ... S(t-k+1).")
+        elif torch.allclose(got[:, k], torch.linalg.matrix_power(S[-1], k) @ X[-1], rtol=1e-6):
+            hint = " Block k uses the features of k steps ago, X(t-k): information arrives late."
+        return False, (f"block k={k} (of K={K}) differs on a window with T={T}, N={N}: expected "
+                       f"row 0 = {_fmt(expected[0, k])}, got {_fmt(got[0, k])}.{hint}")
+
+    return _run("delayed aggregation sequence (eq. 6)", body)
+
+
+def check_local_features(student_fn: Callable) -> CheckResult:
+    """Exercise 03.1: ``student_fn(r, v, R) -> X`` with r, v (N, 2): the 6 local features (N, 6),
+    ordered [sum (v_i - v_j), sum r_ij/|r_ij|^4, sum r_ij/|r_ij|^2] over neighbours within R."""
+    from .features import local_features
+
+    def body():
+        g = _fresh_generator()
+        N = int(torch.randint(5, 20, (1,), generator=g))
+        r = _random_swarm_sequence(g, 1, N)[0]
+        v = torch.randn(N, 2, generator=g, dtype=torch.float64)
+        R = 1.0 + torch.rand(1, generator=g, dtype=torch.float64).item()
+        expected = local_features(r[None], v[None], R)[0]
+        got = _as_tensor(student_fn(r.clone(), v.clone(), R), expected.shape, "X")
+        if torch.allclose(got, expected, rtol=1e-6, atol=1e-9):
+            return True, f"matches the 6 local features on a random swarm (N={N}, R={R:.2f} m)."
+        i = int((got - expected).abs().amax(-1).argmax())
+        names = ("sum (v_i - v_j)", "sum r_ij/|r_ij|^4", "sum r_ij/|r_ij|^2")
+        wrong = [names[k] for k in range(3) if not torch.allclose(got[i, 2 * k:2 * k + 2], expected[i, 2 * k:2 * k + 2], rtol=1e-6)]
+        hint = ""
+        if not torch.isfinite(got).all():
+            hint = " Some values are not finite: leave agent i itself out of its own sums."
+        elif torch.allclose(got[i], -expected[i], rtol=1e-6):
+            hint = " Sign flipped: r_ij = r_i - r_j and v_i - v_j."
+        return False, (f"agent {i} of a random swarm (N={N}, R={R:.2f} m): wrong {', '.join(wrong)}; "
+                       f"expected {_fmt(expected[i])}, got {_fmt(got[i])}.{hint}")
+
+    return _run("local features (DAGNN input)", body)

@@ -15,7 +15,7 @@ import torch
 from .flocking import check_state, pairwise_offsets
 
 GSO_KINDS = ("adjacency", "row_normalized", "sym_normalized", "laplacian", "spectral_normalized")
-DEFAULT_GSO = "row_normalized"
+DEFAULT_GSO = "sym_normalized"
 
 
 def adjacency(r: torch.Tensor, R: float) -> torch.Tensor:
@@ -43,11 +43,13 @@ def gso(A: torch.Tensor, kind: str = DEFAULT_GSO) -> torch.Tensor:
       "laplacian"            S = D - A                 eigenvalues in [0, 2 d_max], symmetric
       "spectral_normalized"  S = A / lambda_max(A)     eigenvalues in [-1, 1], symmetric
 
-    The DAGNN uses "row_normalized" by default, as the public reference code does ("mean pooling"):
-    an aggregated feature is an average, so its scale does not grow with the number of neighbours,
-    and a controller trained on one density or team size N transfers to another. Every kind is
-    local: S_ij = 0 unless j is a neighbour of i, or j = i (the Laplacian's diagonal, which an agent
-    knows without communicating).
+    The DAGNN uses "sym_normalized" by default (the paper does not say which it uses; the public
+    reference code averages, "row_normalized"). Measured in notebook 03: summing ("adjacency")
+    imitates best at the training size N = 50 but its features grow with density and the
+    controller fails at N' = 100; averaging ("row_normalized") transfers perfectly but imitates
+    worse at N = 50; the symmetric normalisation does both. Every kind is local: S_ij = 0 unless j is a neighbour of i, or j = i (the
+    Laplacian's diagonal, which an agent knows without communicating); the spectral
+    normalisation's lambda_max is a global number that no agent can compute alone.
     """
     if A.ndim != 3 or A.shape[-1] != A.shape[-2]:
         raise ValueError(f"A must be a batch of square adjacency matrices (B, N, N), got {tuple(A.shape)}")

@@ -41,7 +41,9 @@ class DAGNNTrainConfig:
         K: taps (K - 1 exchanges; the paper's default K - 1 = 3).
         hidden: MLP hidden widths.
         gso: graph shift operator (see graphs.gso).
-        feature_transform: "signed_log" compresses the 1/r^3-sized repulsion features.
+        feature_transform: "none" (default) feeds the features as they are (standardised by the
+            MLP's first step); "signed_log" compresses the 1/r^3-sized repulsion features first
+            (it imitates worse: notebook 03 compares both).
         rounds: DAgger rounds. Round 0 follows the expert only (the learner is untrained).
         episodes_per_round: new episodes collected per round.
         p_learner: probability of following the learner at each step, rounds >= 1 (paper: 0.33).
@@ -59,7 +61,7 @@ class DAGNNTrainConfig:
     K: int = 4
     hidden: tuple = (64, 64)
     gso: str = DEFAULT_GSO
-    feature_transform: str = "signed_log"
+    feature_transform: str = "none"
     rounds: int = 8
     episodes_per_round: int = 40
     p_learner: float = 0.33
@@ -217,3 +219,35 @@ def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Op
     out = {"config": dataclasses.asdict(cfg), **result.summary(), **(extra or {})}
     path.write_text(json.dumps(out, indent=2) + "\n")
     return path
+
+
+BOOK_RUNS: dict[str, DAGNNTrainConfig] = {
+    "dagnn_K4": DAGNNTrainConfig(),                          # the default: K - 1 = 3 exchanges
+    "dagnn_K3": DAGNNTrainConfig(K=3),                       # Table 1b: K - 1 = 2
+    "dagnn_K2": DAGNNTrainConfig(K=2),                       # Table 1b: K - 1 = 1
+    "dagnn_K1": DAGNNTrainConfig(K=1),                       # no exchange at all
+    "dagnn_K4_no_dagger": DAGNNTrainConfig(p_learner=0.0),   # behaviour cloning on expert data only
+    "dagnn_K4_mean": DAGNNTrainConfig(gso="row_normalized"), # GSO comparison (notebook 03)
+    "dagnn_K4_sum": DAGNNTrainConfig(gso="adjacency"),
+    "dagnn_K4_signed_log": DAGNNTrainConfig(feature_transform="signed_log"),
+}
+"""The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name."""
+
+
+def book_run(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True):
+    """Load (or train) the book's DAGNN ``name``, evaluate it on ``episodes`` held-out episodes
+    (seed EVAL_SEED) and write data/dagnn/NAME.pt and NAME.json. Returns (controller, RelativeCost)."""
+    from .book import DATA_DIR, EVAL_SEED
+
+    if name not in BOOK_RUNS:
+        raise ValueError(f"unknown run {name!r}; the book's runs are {sorted(BOOK_RUNS)}")
+    cfg = FlockConfig()
+    path = DATA_DIR / "dagnn" / f"{name}.pt"
+    controller = load_or_train(path, cfg, BOOK_RUNS[name], retrain=retrain, progress=progress)
+    result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
+    hist = controller.meta["history"]
+    write_evaluation(path.with_suffix(".json"), result, cfg,
+                     extra={"train_config": BOOK_RUNS[name].to_dict(),
+                            "train_seconds": round(hist["seconds"], 1),
+                            "validation_by_round": hist["rounds"]})
+    return controller, result

@@ -71,7 +71,7 @@ class DAGNNController:
     name = "DAGNN"
 
     def __init__(self, model: AggregationMLP, cfg: FlockConfig, gso_kind: str = DEFAULT_GSO,
-                 feature_transform: str = "signed_log"):
+                 feature_transform: str = "none"):
         if gso_kind not in GSO_KINDS:
             raise ValueError(f"unknown GSO kind {gso_kind!r}; expected one of {GSO_KINDS}")
         if feature_transform not in FEATURE_TRANSFORMS:
@@ -90,7 +90,7 @@ class DAGNNController:
         self.buffer.reset()
 
     def features(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        """X(t), (B, N, 6): the exact local features, transformed."""
+        """X(t), (B, N, 6): the exact local features (optionally signed-log transformed)."""
         X = local_features(r, v, self.cfg.R)
         return signed_log(X) if self.feature_transform == "signed_log" else X
 
