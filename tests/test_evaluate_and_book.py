@@ -74,3 +74,20 @@ def test_quick_mode_is_read_from_one_environment_variable(monkeypatch):
         importlib.reload(book)
     monkeypatch.setenv("VGAI_LITE_QUICK", "1")
     importlib.reload(book)
+
+
+def test_aggregation_and_feature_checks_pass_the_library_and_catch_mistakes():
+    from vgai_lite.aggregation import aggregation_sequence
+    from vgai_lite.exercises import check_aggregation_sequence, check_local_features
+    from vgai_lite.features import local_features
+
+    assert check_aggregation_sequence(lambda X, S, K: aggregation_sequence(X[None], S[None], K)[0, -1])
+
+    def static_graph(X, S, K):  # uses S(t)^k: forgets that the graph moves
+        return torch.stack([torch.linalg.matrix_power(S[-1], k) @ X[-1 - k] for k in range(K)], dim=1)
+
+    wrong = check_aggregation_sequence(static_graph)
+    assert not wrong and "graph changes over time" in wrong.message
+    assert check_local_features(lambda r, v, R: local_features(r[None], v[None], R)[0])
+    flipped = check_local_features(lambda r, v, R: -local_features(r[None], v[None], R)[0])
+    assert not flipped and "Sign flipped" in flipped.message

@@ -52,12 +52,21 @@ def cmd_evaluate(args, extra):
     from .evaluate import relative_cost
 
     cfg = _cfg_from(args)
-    torch.manual_seed(0)
-    controllers = {"local": LocalController}
-    if args.controller not in controllers:
-        raise SystemExit(f"unknown controller {args.controller!r}; expected one of {sorted(controllers)}")
-    res = relative_cost(controllers[args.controller](cfg), cfg, episodes=args.episodes, seed=args.seed,
-                        device=args.device)
+    if args.controller == "local":
+        controller = LocalController(cfg)
+    elif args.controller.endswith(".pt"):
+        from .checkpoints import load_controller
+
+        controller = load_controller(args.controller)
+        # fly it in the stored configuration, with the changes asked for on the command line
+        changes = {k: getattr(args, k) for k in ("N", "R", "v_init", "T", "rho") if getattr(args, k) is not None}
+        if args.N is not None and args.N != controller.trained_config.N:
+            changes.setdefault("init_method", "repair")
+        cfg = controller.trained_config.replace(**changes)
+        controller.cfg = cfg
+    else:
+        raise SystemExit(f"--controller must be 'local' or a checkpoint file (.pt), got {args.controller!r}")
+    res = relative_cost(controller, cfg, episodes=args.episodes, seed=args.seed, device=args.device)
     print(res)
     if args.json:
         out = {"config": cfg.to_dict(), **res.summary()}
@@ -142,7 +151,8 @@ def main(argv=None):
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("lab", help="open the book in JupyterLab; other flags go to jupyter lab")
     p = sub.add_parser("evaluate", help="relative cost of a controller against the expert")
-    p.add_argument("--controller", default="local", help="local (learned controllers come with notebook 03)")
+    p.add_argument("--controller", default="local",
+                   help="'local' or a checkpoint, e.g. data/dagnn/dagnn_K4.pt")
     p.add_argument("--episodes", type=int, default=50)
     p.add_argument("--seed", type=int, default=EVAL_SEED, help=f"initial-condition seed (default {EVAL_SEED})")
     p.add_argument("--device", default=None)

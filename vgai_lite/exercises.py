@@ -123,10 +123,10 @@ def check_flocking_cost(student_fn: Callable) -> CheckResult:
     return _run("flocking cost (eq. 1)", body)
 
 
-def _random_swarm_sequence(g: torch.Generator, T: int, N: int):
+def _random_swarm_sequence(g: torch.Generator, T: int, N: int, step: float = 0.1):
     """A short random walk of one swarm, dense enough to have links: r (T, N, 2)."""
     r = torch.rand(1, N, 2, generator=g, dtype=torch.float64) * (N ** 0.5) * 0.6
-    steps = 0.1 * torch.randn(T, 1, N, 2, generator=g, dtype=torch.float64)
+    steps = step * torch.randn(T, 1, N, 2, generator=g, dtype=torch.float64)
     return (r + steps.cumsum(0))[:, 0]
 
 
@@ -141,10 +141,12 @@ def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
 
     def body():
         g = _fresh_generator()
-        T, N, F = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(6, 15, (1,), generator=g)), 3
-        K = int(torch.randint(2, T + 1, (1,), generator=g))
-        r = _random_swarm_sequence(g, T, N)
-        S = gso(adjacency(r, 1.5))
+        T, N, F = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(8, 15, (1,), generator=g)), 3
+        K = int(torch.randint(3, T + 1, (1,), generator=g))
+        for _ in range(50):  # a window whose graph changes at every step, so S(t) S(t-1) != S(t)^2
+            S = gso(adjacency(_random_swarm_sequence(g, T, N, step=0.3), 1.5))
+            if all(not torch.equal(S[t], S[t - 1]) for t in range(1, T)):
+                break
         X = torch.randn(T, N, F, generator=g, dtype=torch.float64)
         expected = aggregation_sequence(X[None], S[None], K)[0, -1]
         got = _as_tensor(student_fn(X.clone(), S.clone(), K), expected.shape, "Z(t)")
