@@ -44,6 +44,7 @@ def column_bearings(rcfg: RenderConfig) -> np.ndarray:
 
 def _space_with_bodies(r: np.ndarray, radius: float, dynamic: bool):
     space = pymunk.Space()
+    space.collision_slop = 1e-4  # m: pymunk's default (0.1) is meant for pixels, not metres
     bodies = []
     for i, (x, y) in enumerate(r):
         if dynamic:
