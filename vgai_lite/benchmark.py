@@ -81,6 +81,26 @@ def run(N: int = 50, batches=(1, 256), steps: int = 20, min_seconds: float = 2.0
     return rows
 
 
+def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=None) -> list[dict]:
+    """Agent-images per second of both renderers (default RenderConfig) and of the pymunk ray caster
+    producing the same depth strip (one swarm at a time, as pymunk works)."""
+    from .physics import raycast_depth
+    from .render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
+
+    cfg, rcfg = FlockConfig(N=N), RenderConfig()
+    r, _ = sample_initial_state(cfg, swarms, torch.Generator().manual_seed(0), device=device)
+    rows = []
+    for name, fn in (("egocentric panorama", lambda: render_egocentric(r, cfg, rcfg)),
+                     ("egocentric depth strip", lambda: egocentric_depth(r, rcfg)),
+                     ("top-down crop", lambda: render_topdown(r, cfg, rcfg))):
+        n, sec = _time(fn, min_seconds)
+        rows.append({"renderer": name, "agent_images_per_s": n * swarms * N / sec})
+    r64 = r[0].double().cpu()
+    n, sec = _time(lambda: raycast_depth(r64, rcfg), min_seconds)
+    rows.append({"renderer": "pymunk ray caster, depth strip", "agent_images_per_s": n * N / sec})
+    return rows
+
+
 def main(args=None) -> None:
     rows = run()
     print(f"torch {torch.__version__}, {torch.get_num_threads()} threads")
@@ -88,3 +108,15 @@ def main(args=None) -> None:
     for row in rows:
         print(f"{row['impl']:32s} {row['batch']:6d} {row['N']:4d} {row['agent_steps_per_s']:15,.0f} "
               f"{row['speedup_vs_baseline']:11.1f}x")
+    from .render import RenderConfig
+
+    rc = RenderConfig()
+    print(f"\nrenderers, 64 swarms x 50 agents, panorama {rc.view_height} x {rc.panorama_width} "
+          f"(4 cameras of {rc.view_height} x {rc.view_width}), {len(rc.channels)} channels; "
+          f"top-down {rc.topdown_size} x {rc.topdown_size}")
+    rrows = run_render()
+    strip = next(x for x in rrows if x["renderer"] == "egocentric depth strip")["agent_images_per_s"]
+    for row in rrows:
+        print(f"{row['renderer']:32s} {row['agent_images_per_s']:12,.0f} agent-images/s")
+    ray = rrows[-1]["agent_images_per_s"]
+    print(f"depth strip: torch / pymunk = {strip / ray:.0f}x")

@@ -195,3 +195,43 @@ def check_local_features(student_fn: Callable) -> CheckResult:
                        f"expected {_fmt(expected[i])}, got {_fmt(got[i])}.{hint}")
 
     return _run("local features (DAGNN input)", body)
+
+
+def check_pinhole(student_fn: Callable) -> CheckResult:
+    """Exercise 04.1: ``student_fn(theta, d, rcfg) -> (u, height)`` for a drone at bearing ``theta``
+    (radians, CCW from +x) and centre distance ``d`` (m): the continuous panorama column u of its
+    bearing and its apparent height in rows, 2 f_v (h/2) / (d - body_radius)."""
+    import math
+
+    from .render import RenderConfig, bearing_to_column
+
+    def body():
+        g = _fresh_generator()
+        rcfg = RenderConfig(view_width=int(torch.randint(8, 64, (1,), generator=g)) * 2,
+                            view_height=int(torch.randint(8, 48, (1,), generator=g)) * 2)
+        for _ in range(20):
+            theta = (2 * torch.rand(1, generator=g, dtype=torch.float64).item() - 1) * math.pi
+            d = 0.2 + 3 * torch.rand(1, generator=g, dtype=torch.float64).item()
+            u_exp = bearing_to_column(torch.tensor(theta, dtype=torch.float64), rcfg).item()
+            h_exp = 2 * rcfg.focal_vertical * (rcfg.body_height / 2) / (d - rcfg.body_radius)
+            got = student_fn(theta, d, rcfg)
+            if not (isinstance(got, tuple) and len(got) == 2):
+                raise TypeError(f"expected a tuple (u, height), got {type(got).__name__}")
+            u, h = (float(x) for x in got)
+            cam = int(u_exp // rcfg.view_width)
+            if abs(u - u_exp) > 1e-6:
+                hint = ""
+                if abs((u - u_exp) % rcfg.view_width) < 1e-6 or abs((u_exp - u) % rcfg.view_width) < 1e-6:
+                    hint = " Right offset within a camera, wrong camera: the order is front, right, back, left."
+                elif abs(2 * rcfg.view_width * (cam + 0.5) - u - u_exp) < 1e-6:
+                    hint = " Mirrored within the camera: columns run left to right, i.e. clockwise."
+                return False, (f"for theta = {math.degrees(theta):.1f}° (camera {cam}, W = {rcfg.view_width}) "
+                               f"expected u = {u_exp:.4f}, got {u:.4f}.{hint}")
+            if abs(h - h_exp) > 1e-6 * max(1.0, h_exp):
+                hint = " Use the distance to the body's near side, d - body_radius." if abs(
+                    h - 2 * rcfg.focal_vertical * (rcfg.body_height / 2) / d) < 1e-6 else ""
+                return False, (f"for d = {d:.3f} m (H = {rcfg.view_height}, vertical FOV "
+                               f"{rcfg.vertical_fov_deg}°) expected height {h_exp:.4f} rows, got {h:.4f}.{hint}")
+        return True, "columns and heights match the pinhole model on 20 random drones and cameras."
+
+    return _run("pinhole column and apparent height", body)

@@ -133,3 +133,48 @@ def animation_html(anim: animation.FuncAnimation, frame_format: str = "jpeg", lo
 
     with matplotlib.rc_context({"animation.frame_format": frame_format}):
         return anim.to_jshtml(default_mode="loop" if loop else "once")
+
+
+def animate_views(traj: Trajectory, cfg: FlockConfig, rcfg=None, agent: int = 0, b: int = 0,
+                  every: int = 5, dpi: int = 60):
+    """The swarm from above beside what one agent sees: its 360° panorama and its top-down crop.
+
+    Returns a FuncAnimation (show it with ``animation_html``). Views are rendered per frame.
+    """
+    from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
+
+    rcfg = rcfg or RenderConfig()
+    r = traj.r[:, b : b + 1]  # (T, 1, N, 2)
+    frames = list(range(0, r.shape[0], every))
+    gray = rcfg.channels.index("gray") if "gray" in rcfg.channels else 0
+    fig = plt.figure(figsize=(11, 4.2), dpi=dpi)
+    ax_swarm = fig.add_axes([0.02, 0.05, 0.3, 0.9])
+    ax_pano = fig.add_axes([0.35, 0.45, 0.63, 0.45])
+    ax_top = fig.add_axes([0.35, 0.02, 0.2, 0.38])
+    rn = _np(r[:, 0])
+    lo, hi = rn.reshape(-1, 2).min(0) - 0.5, rn.reshape(-1, 2).max(0) + 0.5
+    ax_swarm.set_xlim(lo[0], hi[0]), ax_swarm.set_ylim(lo[1], hi[1]), ax_swarm.set_aspect("equal")
+    ax_swarm.set_xticks([]), ax_swarm.set_yticks([])
+    dots = ax_swarm.scatter(rn[0, :, 0], rn[0, :, 1], s=8, color="tab:blue")
+    me = ax_swarm.scatter(rn[0, agent, 0], rn[0, agent, 1], s=60, marker="*", color="tab:red")
+    pano = ax_pano.imshow(np.zeros((rcfg.view_height, rcfg.panorama_width)), cmap="gray", vmin=0, vmax=1)
+    for c in range(1, 4):
+        ax_pano.axvline(c * rcfg.view_width - 0.5, color="tab:orange", lw=0.8)
+    ax_pano.set_xticks([(c + 0.5) * rcfg.view_width for c in range(4)], CAMERAS)
+    ax_pano.set_yticks([])
+    top = ax_top.imshow(np.zeros((rcfg.topdown_size, rcfg.topdown_size)), cmap="gray_r", vmin=0, vmax=1)
+    ax_top.set_xticks([]), ax_top.set_yticks([])
+    ax_top.set_title("top-down crop", fontsize=9)
+    title = ax_pano.set_title("")
+
+    def draw(t):
+        ego = render_egocentric(r[t], cfg, rcfg)[0, agent, gray]
+        crop = render_topdown(r[t], cfg, rcfg)[0, agent, 0]
+        pano.set_data(_np(ego)), top.set_data(_np(crop))
+        dots.set_offsets(rn[t]), me.set_offsets(rn[t, agent])
+        title.set_text(f"agent {agent}'s four cameras, t = {t * cfg.Ts:.2f} s")
+        return [pano, top, dots, me, title]
+
+    anim = animation.FuncAnimation(fig, draw, frames=frames, blit=False)
+    plt.close(fig)
+    return anim

@@ -57,8 +57,9 @@ def swarm_scene_html(traj: Trajectory, cfg: FlockConfig, b: int = 0, every: int 
     center = p[0].mean(axis=0)
     p = p - center * np.array([1, 1, 0])  # start the swarm's centre above the origin
     with meshcat_visualizer() as vis:
-        vis["ground"].set_object(g.Box([12.0, 12.0, 0.01]), g.MeshLambertMaterial(color=0xDDDDDD))
-        vis["ground"].set_transform(tf.translation_matrix([0, 0, -0.005]))
+        vis["/Axes"].set_property("visible", False)
+        # look down on the swarm from above and behind (the camera's frame is y-up, as in three.js)
+        vis["/Cameras/default/rotated/<object>"].set_property("position", [-4.0, 7.0, 5.0])
         body = g.Sphere(rcfg.body_radius * 1.5)
         for i in range(N):
             vis[f"swarm/drone_{i:03d}"].set_object(body, g.MeshLambertMaterial(color=0x1F77B4))
@@ -86,5 +87,5 @@ def swarm_scene_html(traj: Trajectory, cfg: FlockConfig, b: int = 0, every: int 
 
 def iframe(html: str, height: int = 420) -> str:
     """Wrap standalone HTML in an iframe (for ``IPython.display.HTML``), isolated from the notebook."""
-    return (f'<iframe srcdoc="{html_lib.escape(html, quote=True)}" style="width: 100%; height: {height}px; '
-            f'border: none"></iframe>')
+    return (f'<div><iframe srcdoc="{html_lib.escape(html, quote=True)}" style="width: 100%; '
+            f'height: {height}px; border: none"></iframe></div>')
