@@ -70,8 +70,17 @@ def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, d
         _load_weights(model, payload["state_dict"], path)
         controller = DAGNNController(model.to(device).eval(), cfg or stored_cfg, spec["gso"],
                                      spec["feature_transform"])
+    elif kind == "vgai":
+        from .models import AggregationMLP, VGAIController, VGAIModel, VisionConfig, VisualCNN
+
+        c = spec["cnn"]
+        cnn = VisualCNN(c["in_channels"], c["height"], c["width"], spec["F"], c["widths"], c["hidden"])
+        model = VGAIModel(cnn, AggregationMLP(spec["K"], spec["F"], spec["hidden"]))
+        _load_weights(model, payload["state_dict"], path)
+        controller = VGAIController(model.to(device).eval(), cfg or stored_cfg,
+                                    VisionConfig.from_dict(spec["vision"]), spec["gso"])
     else:
-        raise ValueError(f"{path}: unknown controller kind {kind!r} (expected 'dagnn')")
+        raise ValueError(f"{path}: unknown controller kind {kind!r} (expected 'dagnn' or 'vgai')")
     controller.meta = payload["meta"]
     controller.trained_config = stored_cfg
     return controller

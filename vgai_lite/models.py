@@ -6,6 +6,8 @@ r, v (B, N, 2) to accelerations (B, N, 2).
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
 from typing import Sequence
 
 import torch
@@ -16,6 +18,7 @@ from .config import FlockConfig
 from .features import local_features, signed_log
 from .flocking import saturate
 from .graphs import DEFAULT_GSO, GSO_KINDS, adjacency, gso
+from .render import RenderConfig, render_egocentric, render_topdown, with_motion
 
 FEATURE_TRANSFORMS = ("signed_log", "none")
 
@@ -113,3 +116,210 @@ class DAGNNController:
     def __repr__(self) -> str:
         return (f"DAGNNController(K={self.K} taps = {self.K - 1} exchanges, hidden={self.model.hidden}, "
                 f"gso={self.gso_kind!r}, R={self.cfg.R})")
+
+
+# ---------------------------------------------------------------------------------------------
+# The visual state estimator (section 3.3, figure 2) and the VGAI controller (section 3.4)
+
+class ResidualBlock(nn.Module):
+    """Two convolutions with a skip connection, then average pooling along the vertical axis only.
+
+    y = pool_rows( relu( conv2(relu(conv1(x))) + skip(x) ) ),  pool_rows averages ``pool`` rows into
+    one and never touches the columns: every column keeps its bearing.
+    Shapes: (M, c_in, H, W) -> (M, c_out, H / pool, W).
+    """
+
+    def __init__(self, c_in: int, c_out: int, kernel=(3, 3), pool: int = 1):
+        super().__init__()
+        pad = (kernel[0] // 2, kernel[1] // 2)
+        self.conv1 = nn.Conv2d(c_in, c_out, kernel, padding=pad)
+        self.conv2 = nn.Conv2d(c_out, c_out, kernel, padding=pad)
+        self.skip = nn.Conv2d(c_in, c_out, 1) if c_in != c_out else nn.Identity()
+        self.pool = nn.AvgPool2d((pool, 1)) if pool > 1 else nn.Identity()
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        y = self.conv2(torch.relu(self.conv1(x)))
+        return self.pool(torch.relu(y + self.skip(x)))
+
+
+class VisualCNN(nn.Module):
+    """CNN_Psi: one agent's image H_i(t) -> F visual features x_i(t) (paper: four residual blocks and
+    two fully connected layers, average pooling along the vertical axis only).
+
+    Layout (input (M, C, H, W); the panorama's W columns survive to the first fully connected layer):
+      stem      conv 3x3, C -> w1, stride 2 along rows only        -> (w1, H/2, W)
+      block 1   residual 3x3, w1 -> w1, pool all H/2 rows into one -> (w1, 1, W)
+      block 2-4 residual 1x3, w1 -> w2 -> w2 -> w2 (along the columns, i.e. bearings)
+      fc        (w2 W) -> hidden -> F
+    ``aux`` is an extra linear head F -> 6 used only to warm-start the CNN on the exact local
+    features (visual state estimation); the controller never uses it.
+    """
+
+    def __init__(self, in_channels: int, height: int, width: int, F: int = 24,
+                 widths: Sequence[int] = (8, 16), hidden: int = 64):
+        super().__init__()
+        if height % 2 or height < 2:
+            raise ValueError(f"VisualCNN needs an even image height >= 2, got {height}")
+        w1, w2 = widths
+        self.in_channels, self.height, self.width, self.F = in_channels, height, width, F
+        self.widths, self.hidden = (int(w1), int(w2)), int(hidden)
+        self.stem = nn.Conv2d(in_channels, w1, 3, stride=(2, 1), padding=1)
+        self.blocks = nn.Sequential(ResidualBlock(w1, w1, (3, 3), pool=height // 2),
+                                    ResidualBlock(w1, w2, (1, 3)), ResidualBlock(w2, w2, (1, 3)),
+                                    ResidualBlock(w2, w2, (1, 3)))
+        self.fc = nn.Sequential(nn.Flatten(), nn.Linear(w2 * width, hidden), nn.ReLU(), nn.Linear(hidden, F))
+        self.aux = nn.Linear(F, 6)
+
+    def forward(self, images: torch.Tensor) -> torch.Tensor:
+        """(M, C, H, W) -> (M, F)."""
+        if images.shape[1:] != (self.in_channels, self.height, self.width):
+            raise ValueError(f"VisualCNN expects images (M, {self.in_channels}, {self.height}, {self.width}), "
+                             f"got {tuple(images.shape)}")
+        return self.fc(self.blocks(torch.relu(self.stem(images))))
+
+    def flops_per_image(self) -> int:
+        """Multiply-adds x 2 of one forward pass (convolutions and linear layers)."""
+        total, h, w = 0, self.height, self.width
+        w1, w2 = self.widths
+        h2 = h // 2
+        total += 2 * 9 * self.in_channels * w1 * h2 * w                         # stem
+        total += 2 * 2 * 9 * w1 * w1 * h2 * w                                   # block 1
+        total += 2 * 3 * (w1 * w2 + w2 * w2) * w + 2 * w1 * w2 * w              # block 2 (+ 1x1 skip)
+        total += 2 * 2 * 2 * 3 * w2 * w2 * w                                    # blocks 3-4
+        total += 2 * (w2 * w * self.hidden + self.hidden * self.F)              # fc
+        return total
+
+
+class VGAIModel(nn.Module):
+    """The two learned parts of VGAI, trained jointly: CNN_Psi and NN_Theta."""
+
+    def __init__(self, cnn: VisualCNN, mlp: AggregationMLP):
+        super().__init__()
+        if mlp.F != cnn.F:
+            raise ValueError(f"the MLP expects F={mlp.F} features per tap but the CNN gives F={cnn.F}")
+        self.cnn, self.mlp = cnn, mlp
+
+
+VIEWS = ("egocentric", "topdown")
+
+
+@dataclass(frozen=True)
+class VisionConfig:
+    """How a VGAI agent turns the world into the CNN's input (our choices; the paper renders one
+    AirSim frame per step).
+
+    Attributes:
+        view: "egocentric" (the 360° panorama, default) or "topdown".
+        render: RenderConfig of the views. Default: 4 cameras of 12 x 32 (a 12 x 128 panorama, gray and
+            depth channels): half the rows of the renderer's default, as the bodies sit on the
+            horizon and the depth channel already gives their distance; it halves the CNN's cost.
+        motion_gap: g, the frame the current one is paired with is g steps old (0: a single frame).
+            A single frame shows positions only; the expert's action is dominated by velocity
+            alignment, visible only across frames.
+        motion_mode: "difference" ([I(t), 5 (I(t) - I(t-g))]) or "stack" ([I(t), I(t-g)]).
+    """
+
+    view: str = "egocentric"
+    render: RenderConfig = RenderConfig(view_height=12, view_width=32)
+    motion_gap: int = 5
+    motion_mode: str = "difference"
+
+    def __post_init__(self) -> None:
+        if self.view not in VIEWS:
+            raise ValueError(f"VisionConfig: view must be one of {VIEWS}, got {self.view!r}")
+        if not isinstance(self.motion_gap, int) or self.motion_gap < 0:
+            raise ValueError(f"VisionConfig: motion_gap must be an integer >= 0, got {self.motion_gap!r}")
+        if self.motion_mode not in ("difference", "stack"):
+            raise ValueError(f"VisionConfig: motion_mode must be 'difference' or 'stack', got {self.motion_mode!r}")
+
+    def image_shape(self, cfg: FlockConfig) -> tuple:
+        """(C, H, W) of the CNN's input."""
+        c = len(self.render.channels) if self.view == "egocentric" else 1
+        c *= 2 if self.motion_gap > 0 else 1
+        if self.view == "egocentric":
+            return (c, self.render.view_height, self.render.panorama_width)
+        return (c, self.render.topdown_size, self.render.topdown_size)
+
+    def frame(self, r: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
+        """Every agent's raw view at one instant, (B, N, C0, H, W)."""
+        if self.view == "egocentric":
+            return render_egocentric(r, cfg, self.render)
+        return render_topdown(r, cfg, self.render)
+
+    def combine(self, now: torch.Tensor, earlier: torch.Tensor) -> torch.Tensor:
+        """The CNN's input from the current frame and the one g steps earlier."""
+        if self.motion_gap == 0:
+            return now
+        return with_motion(now, earlier, self.motion_mode)
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["render"]["channels"] = list(self.render.channels)
+        return d
+
+    @staticmethod
+    def from_dict(d: dict) -> "VisionConfig":
+        rd = dict(d["render"])
+        rd["channels"] = tuple(rd["channels"])
+        return VisionConfig(view=d["view"], render=RenderConfig(**rd), motion_gap=d["motion_gap"],
+                            motion_mode=d["motion_mode"])
+
+
+class VGAIController:
+    """VGAI as a controller: images -> CNN -> delayed aggregation -> MLP -> u, for any N.
+
+    At each call every agent renders its own view of the positions r (its camera; the velocities
+    ``v`` are ignored: pure vision), pairs it with its frame of g steps ago, the CNN gives x_i(t),
+    the buffer builds Z(t) from the neighbours' past messages, and the MLP gives u_i(t), saturated.
+    ``reset()`` clears the buffer and the frame memory (before the first g steps, the earliest
+    frame stands in for the missing ones).
+    """
+
+    name = "VGAI"
+
+    def __init__(self, model: VGAIModel, cfg: FlockConfig, vision: VisionConfig = VisionConfig(),
+                 gso_kind: str = DEFAULT_GSO):
+        expected = vision.image_shape(cfg)
+        got = (model.cnn.in_channels, model.cnn.height, model.cnn.width)
+        if expected != got:
+            raise ValueError(f"the CNN takes images {got} but the vision config produces {expected}")
+        if gso_kind not in GSO_KINDS:
+            raise ValueError(f"unknown GSO kind {gso_kind!r}; expected one of {GSO_KINDS}")
+        self.model, self.cfg, self.vision, self.gso_kind = model, cfg, vision, gso_kind
+        self.buffer = AggregationBuffer(model.mlp.K)
+        self.frames: list = []
+
+    @property
+    def K(self) -> int:
+        return self.model.mlp.K
+
+    def reset(self) -> None:
+        self.buffer.reset()
+        self.frames = []
+
+    def features(self, r: torch.Tensor) -> torch.Tensor:
+        """X(t) from the agents' images, (B, N, F); keeps the frames needed for motion."""
+        now = self.vision.frame(r, self.cfg)
+        g = self.vision.motion_gap
+        self.frames.append(now)
+        if len(self.frames) > g + 1:
+            self.frames.pop(0)
+        images = self.vision.combine(now, self.frames[0])
+        B, N = images.shape[:2]
+        return self.model.cnn(images.flatten(0, 1)).view(B, N, -1)
+
+    def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+        S = gso(adjacency(r, self.cfg.R), self.gso_kind)
+        Z = self.buffer.push(self.features(r), S)
+        return saturate(self.model.mlp(Z), self.cfg)
+
+    def spec(self) -> dict:
+        cnn, mlp = self.model.cnn, self.model.mlp
+        return {"kind": "vgai", "K": mlp.K, "F": mlp.F, "hidden": list(mlp.hidden), "gso": self.gso_kind,
+                "cnn": {"in_channels": cnn.in_channels, "height": cnn.height, "width": cnn.width,
+                        "widths": list(cnn.widths), "hidden": cnn.hidden},
+                "vision": self.vision.to_dict()}
+
+    def __repr__(self) -> str:
+        return (f"VGAIController(F={self.model.cnn.F}, K={self.K} taps, view={self.vision.view!r}, "
+                f"motion_gap={self.vision.motion_gap}, gso={self.gso_kind!r})")

@@ -1,0 +1,270 @@
+"""Training VGAI: the CNN and the aggregation MLP together, by imitation with DAgger and K-step BPTT.
+
+Introduced in notebook 06. Images are rendered on the fly from stored swarm states (no image dataset
+on disk). The paper trains CNN_Psi and NN_Theta jointly end to end, by K-step backpropagation through
+time (its figure 3): for a window of K consecutive steps, every agent's K images go through the CNN,
+the features travel through the delayed aggregation (eq. 6), the MLP acts once at the last step, and
+the L1 loss against the expert's action flows back through all K CNN passes.
+
+The paper is silent on how long to train and on warm starts. Ours, in three stages, to train in
+minutes on two CPU cores:
+  1. visual state estimation: the CNN (through a linear head) regresses the DAGNN's 6 exact local
+     features from single agents' images;
+  2. the MLP is fitted on Z(t) built from the (frozen) CNN's features, like the DAGNN;
+  3. joint K-step BPTT of both on windows, with DAgger rounds (learner followed with probability
+     0.33) adding the learner's own states.
+Loss L1 (eq. 11) and Adam at learning rate 1e-3 (the paper's) in every stage.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional, Union
+
+import torch
+import torch.nn.functional as nnf
+from tqdm.auto import tqdm
+
+from .aggregation import aggregation_sequence
+from .checkpoints import save_controller
+from .config import FlockConfig
+from .controllers import expert_control
+from .evaluate import relative_cost
+from .features import local_features
+from .flocking import sample_initial_state, saturate, step
+from .graphs import DEFAULT_GSO, adjacency, gso
+from .imitation import VALIDATION_SEED_OFFSET
+from .models import AggregationMLP, VGAIController, VGAIModel, VisionConfig, VisualCNN
+
+
+@dataclass(frozen=True)
+class VGAITrainConfig:
+    """Everything that defines a VGAI training run.
+
+    Attributes:
+        F, K, hidden, gso: features per agent (paper default 24), taps (K - 1 = 3 exchanges),
+            MLP hidden widths, graph shift operator.
+        cnn_widths, cnn_hidden: channels of the CNN's two stages, width of its hidden FC layer.
+        vision: what the agents see (view, resolution, motion frames).
+        expert_episodes: episodes of round 0, flown by the expert alone.
+        dagger_rounds, episodes_per_round, p_learner: DAgger rounds after the warm starts, new
+            episodes per round, probability of following the learner at each step (paper: 0.33).
+        warm_steps, warm_states: stage 1, gradient steps and swarm states (x N agents' images) per step.
+        mlp_epochs: stage 2, passes over the frozen-CNN dataset.
+        joint_steps, windows: stage 3, gradient steps per DAgger round and K-step windows per step.
+        lr: Adam's learning rate (paper: 1e-3).
+        early_steps, early_share: sampled states and window ends fall in the first ``early_steps``
+            steps with probability ``early_share`` (the expert's labels live early).
+        seed: seed of the training initial conditions, sampling and weights.
+    """
+
+    F: int = 24
+    K: int = 4
+    hidden: tuple = (64, 64)
+    gso: str = DEFAULT_GSO
+    cnn_widths: tuple = (8, 16)
+    cnn_hidden: int = 64
+    vision: VisionConfig = VisionConfig()
+    expert_episodes: int = 40
+    dagger_rounds: int = 3
+    episodes_per_round: int = 16
+    p_learner: float = 0.33
+    warm_steps: int = 600
+    warm_states: int = 4
+    mlp_epochs: int = 4
+    joint_steps: int = 300
+    windows: int = 4
+    lr: float = 1e-3
+    early_steps: int = 50
+    early_share: float = 0.75
+    seed: int = 0
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["hidden"], d["cnn_widths"] = list(self.hidden), list(self.cnn_widths)
+        d["vision"] = self.vision.to_dict()
+        return d
+
+
+@dataclass
+class EpisodeStore:
+    """Stored swarm trajectories: r, v, u* (the expert's action), each (T, E, N, 2)."""
+
+    r: list = field(default_factory=list)
+    v: list = field(default_factory=list)
+    u: list = field(default_factory=list)
+
+    def add(self, r, v, u):
+        self.r.append(r), self.v.append(v), self.u.append(u)
+
+    def tensors(self):
+        return torch.cat(self.r, 1), torch.cat(self.v, 1), torch.cat(self.u, 1)
+
+    @property
+    def episodes(self) -> int:
+        return sum(x.shape[1] for x in self.r)
+
+
+@torch.no_grad()
+def collect_episodes(learner: Optional[VGAIController], cfg: FlockConfig, r0, v0, p_learner: float,
+                     generator: torch.Generator):
+    """Fly (r0, v0) under the DAgger mixture (learner with probability p_learner per swarm and step,
+    else the expert) and return r, v, u* of every step, (T, B, N, 2) each."""
+    if learner is not None:
+        learner.reset()
+    r, v = r0, v0
+    rs, vs, us = [], [], []
+    for _ in range(cfg.T):
+        u_star = expert_control(r, v, cfg)
+        u = u_star
+        if learner is not None and p_learner > 0:
+            u_l = learner(r, v)  # the learner must act every step to keep its buffers current
+            follow = torch.rand(r.shape[0], generator=generator) < p_learner
+            u = torch.where(follow[:, None, None], u_l, u_star)
+        rs.append(r), vs.append(v), us.append(u_star)
+        r, v = step(r, v, saturate(u, cfg), cfg)
+    return torch.stack(rs), torch.stack(vs), torch.stack(us)
+
+
+def _sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> torch.Tensor:
+    early = torch.rand(n, generator=g) < tcfg.early_share
+    t_early = torch.randint(0, min(tcfg.early_steps, T), (n,), generator=g)
+    t_any = torch.randint(0, T, (n,), generator=g)
+    return torch.where(early, t_early, t_any)
+
+
+def _images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, e: torch.Tensor,
+            t: torch.Tensor) -> torch.Tensor:
+    """CNN inputs of every agent at stored states (e, t): (M, N, C, H, W), motion frame at t - g."""
+    now = vision.frame(r[t, e], cfg)
+    if vision.motion_gap == 0:
+        return now
+    earlier = vision.frame(r[(t - vision.motion_gap).clamp(min=0), e], cfg)
+    return vision.combine(now, earlier)
+
+
+def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
+               checkpoint: Optional[Union[str, Path]] = None, progress: bool = True,
+               validation_episodes: int = 10) -> tuple[VGAIController, dict]:
+    """Train VGAI in the three stages of the module docstring; save to ``checkpoint`` as it goes.
+
+    Returns the controller and its history: per stage the losses, and per DAgger round the
+    validation relative cost (seed + 1000) with the seconds elapsed.
+    """
+    torch.manual_seed(tcfg.seed)
+    gen = torch.Generator().manual_seed(tcfg.seed)
+    vision = tcfg.vision
+    C, H, W = vision.image_shape(cfg)
+    cnn = VisualCNN(C, H, W, tcfg.F, tcfg.cnn_widths, tcfg.cnn_hidden)
+    model = VGAIModel(cnn, AggregationMLP(tcfg.K, tcfg.F, tcfg.hidden))
+    learner = VGAIController(model, cfg, vision, tcfg.gso)
+    history = {"warm_loss": [], "mlp_loss": [], "joint_loss": [], "rounds": []}
+    start = time.perf_counter()
+
+    def save(finished=False):
+        if checkpoint is not None:
+            history["seconds"] = time.perf_counter() - start
+            save_controller(checkpoint, learner, meta={"train_config": tcfg.to_dict(), "history": history,
+                                                       "finished": finished})
+
+    def validate(stage):
+        model.eval()
+        val = relative_cost(learner, cfg, episodes=validation_episodes, seed=tcfg.seed + VALIDATION_SEED_OFFSET)
+        history["rounds"].append({"stage": stage, "episodes": store.episodes,
+                                  "val_relative_cost": val.mean_ratio,
+                                  "val_share_below_0.05m": val.safety.share_below(0.05),
+                                  "seconds": time.perf_counter() - start})
+        save()
+        return val.mean_ratio
+
+    # Round 0: the expert flies alone.
+    store = EpisodeStore()
+    r0, v0 = sample_initial_state(cfg, tcfg.expert_episodes, gen)
+    store.add(*collect_episodes(None, cfg, r0, v0, 0.0, gen))
+
+    # Stage 1: visual state estimation (the CNN regresses the exact local features).
+    r, v, u = store.tensors()
+    T, E = r.shape[:2]
+    X_all = local_features(r.flatten(0, 1), v.flatten(0, 1), cfg.R)
+    x_mean, x_std = X_all.mean((0, 1)), X_all.std((0, 1)).clamp(min=1e-6)
+    opt_cnn = torch.optim.Adam(cnn.parameters(), lr=tcfg.lr)
+    model.train()
+    for _ in tqdm(range(tcfg.warm_steps), desc="stage 1: CNN <- local features", disable=not progress):
+        e = torch.randint(0, E, (tcfg.warm_states,), generator=gen)
+        t = _sample_times(tcfg.warm_states, T, tcfg, gen)
+        img = _images(vision, cfg, r, e, t)
+        target = (local_features(r[t, e], v[t, e], cfg.R) - x_mean) / x_std
+        loss = nnf.l1_loss(cnn.aux(cnn(img.flatten(0, 1))), target.flatten(0, 1))
+        opt_cnn.zero_grad(set_to_none=True)
+        loss.backward()
+        opt_cnn.step()
+        history["warm_loss"].append(loss.item())
+
+    # Stage 2: the MLP on Z(t) built from the frozen CNN's features, like the DAGNN.
+    model.eval()
+    with torch.no_grad():
+        S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
+        X = torch.stack([cnn(_images(vision, cfg, r, torch.arange(E), torch.full((E,), t)).flatten(0, 1))
+                         .view(E, cfg.N, -1) for t in range(T)])  # (T, E, N, F)
+        Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
+    keep_t = torch.cat((torch.arange(min(tcfg.early_steps, T)), torch.arange(tcfg.early_steps, T, 4)))
+    Zr = Z[:, keep_t].reshape(-1, tcfg.K, tcfg.F)
+    Ur = u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
+    model.mlp.set_normalization(Zr)
+    opt_mlp = torch.optim.Adam(model.mlp.parameters(), lr=tcfg.lr)
+    model.train()
+    for _ in tqdm(range(tcfg.mlp_epochs), desc="stage 2: MLP on CNN features", disable=not progress):
+        perm = torch.randperm(len(Ur), generator=gen)
+        total = 0.0
+        for i in range(0, len(perm), 1024):
+            idx = perm[i:i + 1024]
+            loss = nnf.l1_loss(model.mlp(Zr[idx]), Ur[idx])
+            opt_mlp.zero_grad(set_to_none=True)
+            loss.backward()
+            opt_mlp.step()
+            total += loss.item() * len(idx)
+        history["mlp_loss"].append(total / len(perm))
+    del Z, Zr, X, S
+    validate("after stages 1-2")
+
+    # Stage 3: joint K-step BPTT, with DAgger rounds.
+    opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
+    K = tcfg.K
+    for rnd in range(tcfg.dagger_rounds):
+        model.eval()
+        r0, v0 = sample_initial_state(cfg, tcfg.episodes_per_round, gen)
+        store.add(*collect_episodes(learner, cfg, r0, v0, tcfg.p_learner, gen))
+        r, v, u = store.tensors()
+        T, E = r.shape[:2]
+        model.train()
+        bar = tqdm(range(tcfg.joint_steps), desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}",
+                   disable=not progress)
+        for _ in bar:
+            e = torch.randint(0, E, (tcfg.windows,), generator=gen)
+            t_end = _sample_times(tcfg.windows, T, tcfg, gen)
+            tau = t_end[:, None] - (K - 1) + torch.arange(K)  # (windows, K) times of the window
+            valid = (tau >= 0).float()
+            tau_c = tau.clamp(min=0)
+            ee = e[:, None].expand_as(tau)
+            img = _images(vision, cfg, r, ee.flatten(), tau_c.flatten())  # (windows K, N, C, H, W)
+            Xw = cnn(img.flatten(0, 1)).view(tcfg.windows, K, cfg.N, tcfg.F) * valid[:, :, None, None]
+            Sw = gso(adjacency(r[tau_c.flatten(), ee.flatten()], cfg.R), tcfg.gso).view(tcfg.windows, K, cfg.N, cfg.N)
+            Sw = Sw * valid[:, :, None, None]
+            Zw = aggregation_sequence(Xw, Sw, K)[:, -1]  # Z at the window's last step, (windows, N, K, F)
+            loss = nnf.l1_loss(model.mlp(Zw), u[t_end, e])
+            opt.zero_grad(set_to_none=True)
+            loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
+            opt.step()
+            history["joint_loss"].append(loss.item())
+            bar.set_postfix(loss=f"{loss.item():.2f}")
+        cost = validate(f"DAgger round {rnd + 1}")
+        if progress:
+            print(f"round {rnd + 1}: validation relative cost {cost:.2f} after {time.perf_counter() - start:.0f} s")
+    model.eval()
+    history["seconds"] = time.perf_counter() - start
+    save(finished=True)
+    learner.meta = {"train_config": tcfg.to_dict(), "history": history, "finished": True}
+    return learner, history
