@@ -6,6 +6,7 @@
   export     headless: execute every notebook and write it as HTML, to read without Jupyter
   benchmark  agent-steps per second of the simulator
   train-dagnn  train (or load) the book's DAGNN baselines, evaluate them, write data/dagnn/
+  train-vgai   train (or load) the book's VGAI and visual state estimators, write data/vgai/
 """
 
 from __future__ import annotations
@@ -139,6 +140,26 @@ def cmd_train_dagnn(args, extra):
         print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote data/dagnn/{name}.pt and .json")
 
 
+def cmd_train_vgai(args, extra):
+    import torch
+
+    from .bptt import ESTIMATOR_RUNS, VGAI_RUNS, book_estimator, book_vgai
+
+    torch.set_num_threads(args.threads)
+    if args.estimators:
+        for name in sorted(ESTIMATOR_RUNS):
+            cnn, vision, meta = book_estimator(name, retrain=args.retrain)
+            print(f"{name}: trained in {meta['seconds']:.0f} s; correlation with the exact features by step:")
+            for t, q in meta["quality"].items():
+                print(f"  t = {t:>3}: " + " ".join(f"{x:5.2f}" for x in q))
+    for name in args.names:
+        controller, result = book_vgai(name, retrain=args.retrain, episodes=args.episodes)
+        print(result)
+        print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote data/vgai/{name}.pt and .json")
+    if not args.names and not args.estimators:
+        raise SystemExit(f"name a run ({sorted(VGAI_RUNS)}) or --estimators")
+
+
 def cmd_benchmark(args, extra):
     from . import benchmark
 
@@ -173,11 +194,18 @@ def main(argv=None):
     p.add_argument("--retrain", action="store_true", help="train even if an up-to-date checkpoint exists")
     p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
     p.add_argument("--threads", type=int, default=1, help="torch threads (run two jobs on two cores)")
+    p = sub.add_parser("train-vgai", help="train (or load) the book's VGAI and state estimators, write data/vgai/")
+    p.add_argument("names", nargs="*", help="VGAI runs to train, e.g. vgai_F24")
+    p.add_argument("--estimators", action="store_true", help="the single- and two-frame state estimators")
+    p.add_argument("--retrain", action="store_true")
+    p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
+    p.add_argument("--threads", type=int, default=2)
     args, extra = parser.parse_known_args(argv)
     if extra and args.command != "lab":
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
-     "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn}[args.command](args, extra)
+     "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn,
+     "train-vgai": cmd_train_vgai}[args.command](args, extra)
 
 
 if __name__ == "__main__":

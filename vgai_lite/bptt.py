@@ -72,8 +72,8 @@ class VGAITrainConfig:
     dagger_rounds: int = 3
     episodes_per_round: int = 16
     p_learner: float = 0.33
-    warm_steps: int = 600
-    warm_states: int = 4
+    warm_steps: int = 3000
+    warm_states: int = 8
     mlp_epochs: int = 4
     joint_steps: int = 300
     windows: int = 4
@@ -146,6 +146,57 @@ def _images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, e: torch.Te
     return vision.combine(now, earlier)
 
 
+def feature_scale(cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Mean and spread of the 6 exact local features over stored states r, v (T, E, N, 2)."""
+    X = local_features(r.flatten(0, 1), v.flatten(0, 1), cfg.R)
+    return X.mean((0, 1)), X.std((0, 1)).clamp(min=1e-6)
+
+
+def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor,
+                        v: torch.Tensor, steps: int, states: int, tcfg: VGAITrainConfig,
+                        gen: torch.Generator, progress: bool = True) -> list:
+    """Visual state estimation: train the CNN (through its ``aux`` head) to regress the standardised
+    exact local features of every agent from its own images, on stored states r, v (T, E, N, 2).
+    Each step draws ``states`` swarm states (all N agents' images). Returns the L1 loss per step."""
+    T, E = r.shape[:2]
+    x_mean, x_std = feature_scale(cfg, r, v)
+    cnn.aux_mean.copy_(x_mean), cnn.aux_std.copy_(x_std)
+    opt = torch.optim.Adam(cnn.parameters(), lr=tcfg.lr)
+    cnn.train()
+    losses = []
+    for _ in tqdm(range(steps), desc="visual state estimation", disable=not progress):
+        e = torch.randint(0, E, (states,), generator=gen)
+        t = _sample_times(states, T, tcfg, gen)
+        img = _images(vision, cfg, r, e, t)
+        target = (local_features(r[t, e], v[t, e], cfg.R) - x_mean) / x_std
+        loss = nnf.l1_loss(cnn.aux(cnn(img.flatten(0, 1))), target.flatten(0, 1))
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    cnn.eval()
+    return losses
+
+
+@torch.no_grad()
+def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, episodes: int = 8,
+                      times=(2, 8, 20, 60), seed: int = 2020) -> dict:
+    """Correlation between the CNN's estimate (aux head) and the exact local features, per feature,
+    at a few time steps of expert flights from held-out initial conditions: {t: [6 values]}."""
+    from .controllers import ExpertController
+    from .flocking import rollout
+
+    r0, v0 = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
+    traj = rollout(ExpertController(cfg), cfg, r0, v0)
+    out = {}
+    for t in times:
+        e, tt = torch.arange(episodes), torch.full((episodes,), t)
+        pred = cnn.aux(cnn(_images(vision, cfg, traj.r, e, tt).flatten(0, 1)))
+        X = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
+        out[t] = [torch.corrcoef(torch.stack((pred[:, k], X[:, k])))[0, 1].item() for k in range(6)]
+    return out
+
+
 def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
                checkpoint: Optional[Union[str, Path]] = None, progress: bool = True,
                validation_episodes: int = 10) -> tuple[VGAIController, dict]:
@@ -188,20 +239,8 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
     # Stage 1: visual state estimation (the CNN regresses the exact local features).
     r, v, u = store.tensors()
     T, E = r.shape[:2]
-    X_all = local_features(r.flatten(0, 1), v.flatten(0, 1), cfg.R)
-    x_mean, x_std = X_all.mean((0, 1)), X_all.std((0, 1)).clamp(min=1e-6)
-    opt_cnn = torch.optim.Adam(cnn.parameters(), lr=tcfg.lr)
-    model.train()
-    for _ in tqdm(range(tcfg.warm_steps), desc="stage 1: CNN <- local features", disable=not progress):
-        e = torch.randint(0, E, (tcfg.warm_states,), generator=gen)
-        t = _sample_times(tcfg.warm_states, T, tcfg, gen)
-        img = _images(vision, cfg, r, e, t)
-        target = (local_features(r[t, e], v[t, e], cfg.R) - x_mean) / x_std
-        loss = nnf.l1_loss(cnn.aux(cnn(img.flatten(0, 1))), target.flatten(0, 1))
-        opt_cnn.zero_grad(set_to_none=True)
-        loss.backward()
-        opt_cnn.step()
-        history["warm_loss"].append(loss.item())
+    history["warm_loss"] = fit_state_estimator(cnn, vision, cfg, r, v, tcfg.warm_steps, tcfg.warm_states,
+                                               tcfg, gen, progress)
 
     # Stage 2: the MLP on Z(t) built from the frozen CNN's features, like the DAGNN.
     model.eval()
@@ -268,3 +307,110 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
     save(finished=True)
     learner.meta = {"train_config": tcfg.to_dict(), "history": history, "finished": True}
     return learner, history
+
+
+# ---------------------------------------------------------------------------------------------
+# Stand-alone visual state estimators (notebook 05): single frame versus two frames
+
+ESTIMATOR_FORMAT = "vgai-lite-estimator/1"
+
+ESTIMATOR_RUNS: dict[str, VisionConfig] = {
+    "estimator_motion": VisionConfig(),                 # [I(t), 5 (I(t) - I(t-5))]
+    "estimator_single": VisionConfig(motion_gap=0),     # I(t) only
+}
+"""The state estimators the book ships in data/vgai/, by name."""
+
+
+def train_state_estimator(cfg: FlockConfig, vision: VisionConfig, steps: int = 3000, states: int = 8,
+                          F: int = 24, episodes: int = 40, seed: int = 0, progress: bool = True):
+    """Fly ``episodes`` expert episodes, then train a fresh VisualCNN to estimate the exact local
+    features from images (stage 1 of VGAI's training, on its own). Returns (cnn, losses, seconds)."""
+    tcfg = VGAITrainConfig(F=F, vision=vision, seed=seed)
+    torch.manual_seed(seed)
+    gen = torch.Generator().manual_seed(seed)
+    start = time.perf_counter()
+    r0, v0 = sample_initial_state(cfg, episodes, gen)
+    r, v, _ = collect_episodes(None, cfg, r0, v0, 0.0, gen)
+    C, H, W = vision.image_shape(cfg)
+    cnn = VisualCNN(C, H, W, F, tcfg.cnn_widths, tcfg.cnn_hidden)
+    losses = fit_state_estimator(cnn, vision, cfg, r, v, steps, states, tcfg, gen, progress)
+    return cnn, losses, time.perf_counter() - start
+
+
+def save_estimator(path: Union[str, Path], cnn: VisualCNN, vision: VisionConfig, meta: dict) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    payload = {"format": ESTIMATOR_FORMAT, "vision": vision.to_dict(),
+               "cnn": {"in_channels": cnn.in_channels, "height": cnn.height, "width": cnn.width, "F": cnn.F,
+                       "widths": list(cnn.widths), "hidden": cnn.hidden},
+               "state_dict": {k: t.detach().cpu() for k, t in cnn.state_dict().items()}, "meta": meta}
+    torch.save(payload, path)
+    return path
+
+
+def load_estimator(path: Union[str, Path]) -> tuple[VisualCNN, VisionConfig, dict]:
+    """(cnn, vision, meta) from an estimator file (weights_only: no code runs)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no estimator at {path}: run `python -m vgai_lite train-vgai --estimators`")
+    payload = torch.load(path, map_location="cpu", weights_only=True)
+    if not isinstance(payload, dict) or payload.get("format") != ESTIMATOR_FORMAT:
+        raise ValueError(f"{path} is not a vgai-lite state estimator (format {ESTIMATOR_FORMAT!r})")
+    c = payload["cnn"]
+    cnn = VisualCNN(c["in_channels"], c["height"], c["width"], c["F"], c["widths"], c["hidden"])
+    cnn.load_state_dict(payload["state_dict"])
+    return cnn.eval(), VisionConfig.from_dict(payload["vision"]), payload["meta"]
+
+
+def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress: bool = True):
+    """Load (or train and save) the book's state estimator ``name`` in data/vgai/."""
+    from .book import DATA_DIR
+
+    if name not in ESTIMATOR_RUNS:
+        raise ValueError(f"unknown estimator {name!r}; the book's are {sorted(ESTIMATOR_RUNS)}")
+    path = DATA_DIR / "vgai" / f"{name}.pt"
+    vision = ESTIMATOR_RUNS[name]
+    if path.is_file() and not retrain:
+        cnn, stored_vision, meta = load_estimator(path)
+        if stored_vision == vision and meta.get("steps") == steps:
+            return cnn, vision, meta
+    cfg = FlockConfig()
+    cnn, losses, seconds = train_state_estimator(cfg, vision, steps=steps, progress=progress)
+    quality = estimator_quality(cnn, vision, cfg)
+    meta = {"steps": steps, "losses": losses, "seconds": seconds,
+            "quality": {str(t): q for t, q in quality.items()}}
+    save_estimator(path, cnn, vision, meta)
+    return cnn, vision, meta
+
+
+VGAI_RUNS: dict[str, VGAITrainConfig] = {
+    "vgai_F24": VGAITrainConfig(),   # the paper's default: F = 24, K - 1 = 3, egocentric, two frames
+}
+"""The VGAI controllers the book ships in data/vgai/, by name."""
+
+
+def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True):
+    """Load (or train, about 15-20 minutes) the book's VGAI ``name``, evaluate it on ``episodes``
+    held-out episodes and write data/vgai/NAME.pt and NAME.json. Returns (controller, RelativeCost)."""
+    from .book import DATA_DIR, EVAL_SEED
+    from .checkpoints import load_controller, read_checkpoint
+    from .imitation import write_evaluation
+
+    if name not in VGAI_RUNS:
+        raise ValueError(f"unknown run {name!r}; the book's VGAI runs are {sorted(VGAI_RUNS)}")
+    cfg, tcfg = FlockConfig(), VGAI_RUNS[name]
+    path = DATA_DIR / "vgai" / f"{name}.pt"
+    controller = None
+    if path.is_file() and not retrain:
+        payload = read_checkpoint(path)
+        if (payload["config"] == dataclasses.asdict(cfg) and payload["meta"].get("train_config") == tcfg.to_dict()
+                and payload["meta"].get("finished")):
+            controller = load_controller(path)
+    if controller is None:
+        controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress)
+    result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
+    hist = controller.meta["history"]
+    write_evaluation(path.with_suffix(".json"), result, cfg,
+                     extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
+                            "validation": hist["rounds"]})
+    return controller, result

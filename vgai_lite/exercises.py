@@ -235,3 +235,44 @@ def check_pinhole(student_fn: Callable) -> CheckResult:
         return True, "columns and heights match the pinhole model on 20 random drones and cameras."
 
     return _run("pinhole column and apparent height", body)
+
+
+def check_residual_block(student_cls: Callable) -> CheckResult:
+    """Exercise 05.1: ``student_cls(c_in, c_out, pool)`` builds an nn.Module whose forward maps
+    (M, c_in, H, W) to (M, c_out, H / pool, W): two 3x3 convolutions with a skip connection, then
+    average pooling of ``pool`` rows into one, the columns untouched."""
+    def body():
+        g = _fresh_generator()
+        for _ in range(3):
+            c_in, c_out = (int(x) for x in torch.randint(1, 6, (2,), generator=g))
+            pool = int(torch.randint(1, 4, (1,), generator=g))
+            H, W, M = pool * int(torch.randint(1, 5, (1,), generator=g)), int(torch.randint(8, 40, (1,), generator=g)), 3
+            block = student_cls(c_in, c_out, pool)
+            if not isinstance(block, torch.nn.Module):
+                raise TypeError(f"expected an nn.Module, got {type(block).__name__}")
+            x = torch.randn(M, c_in, H, W, generator=g, requires_grad=True)
+            y = block(x)
+            want = (M, c_out, H // pool, W)
+            if tuple(y.shape) != want:
+                hint = ""
+                if y.ndim == 4 and y.shape[-1] != W:
+                    hint = " The width changed: pool along the rows only, e.g. nn.AvgPool2d((pool, 1))."
+                elif y.ndim == 4 and y.shape[-2] == H and pool > 1:
+                    hint = " The rows were not pooled."
+                elif y.ndim == 4 and y.shape[-2] != H // pool:
+                    hint = " Pad the 3x3 convolutions (padding=1) so that they keep the size."
+                return False, f"for input {tuple(x.shape)} with pool={pool} expected output {want}, got {tuple(y.shape)}.{hint}"
+            y.sum().backward()
+            if x.grad is None or x.grad.abs().sum() == 0:
+                return False, "the output does not depend on the input (no gradient reaches it)."
+            # columns far apart do not mix: two 3x3 convolutions see at most 2 columns to each side
+            x2 = x.detach().clone()
+            x2[..., -1] += 5.0
+            with torch.no_grad():
+                change = (block(x2) - block(x.detach())).abs().amax(dim=(0, 1, 2))
+            if W > 6 and change[: W - 3].max() > 1e-5:
+                return False, ("changing the last column changed columns far from it: keep the convolutions "
+                               "local (3x3) and do not pool or mix across columns.")
+        return True, "right output shapes, rows pooled, columns kept, and a column only sees its neighbours."
+
+    return _run("residual block with vertical-only pooling", body)

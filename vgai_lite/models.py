@@ -169,6 +169,12 @@ class VisualCNN(nn.Module):
                                     ResidualBlock(w2, w2, (1, 3)))
         self.fc = nn.Sequential(nn.Flatten(), nn.Linear(w2 * width, hidden), nn.ReLU(), nn.Linear(hidden, F))
         self.aux = nn.Linear(F, 6)
+        self.register_buffer("aux_mean", torch.zeros(6))  # scale of the exact features aux estimates
+        self.register_buffer("aux_std", torch.ones(6))
+
+    def estimate_local_features(self, images: torch.Tensor) -> torch.Tensor:
+        """The warm-start head's estimate of the 6 exact local features, (M, C, H, W) -> (M, 6)."""
+        return self.aux(self(images)) * self.aux_std + self.aux_mean
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
         """(M, C, H, W) -> (M, F)."""

@@ -1,0 +1,220 @@
+# %% [markdown]
+# # 05 · The visual state estimator: a CNN that keeps the bearings
+#
+# *Paper: section 3.3 and figure 2.*
+#
+# In VGAI each drone compresses what it sees, $\mathbf H_i(t)$, into $F$ numbers,
+# $\mathbf x_i(t) = \mathrm{CNN}_\Psi(\mathbf H_i(t))$, which it then exchanges with its neighbours
+# exactly as the DAGNN exchanged its six exact features. The paper's CNN has **four residual blocks and
+# two fully connected layers**, and one task-specific twist: it **pools only along the vertical
+# axis**, because all the drones fly at the same height.
+#
+# This notebook: the architecture and its cost; why vertical-only pooling; what the CNN can learn
+# from one frame and from two (visual state estimation); where it looks.
+
+# %%
+import time
+
+import matplotlib.pyplot as plt
+import numpy as np
+import torch
+from IPython.display import Markdown, display
+
+from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
+from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.bptt import _images, book_estimator, estimator_quality, train_state_estimator
+from vgai_lite.features import FEATURE_NAMES, local_features
+from vgai_lite.models import VisionConfig, VisualCNN
+
+torch.set_num_threads(2)
+cfg, vision = FlockConfig(), VisionConfig()
+print("quick mode" if QUICK else "full mode")
+print(vision)
+
+# %% [markdown]
+# ## 1. The input
+#
+# Each drone's CNN sees its 360° panorama from notebook 04 at a reduced **12 × 128** (four cameras of
+# 12 × 32; the drones sit on the horizon and the depth channel already gives their distance, so half
+# the rows cost half the compute and lose little), with two channels (gray, depth), paired with the
+# frame of $g = 5$ steps earlier as $[\mathbf I(t),\ 5(\mathbf I(t) - \mathbf I(t-g))]$: 4 channels in all.
+# Why two frames is the subject of section 4.
+
+# %%
+r0, v0 = sample_initial_state(cfg, pick(8, 2), torch.Generator().manual_seed(EVAL_SEED))
+traj = rollout(ExpertController(cfg), cfg, r0, v0)
+t = 10
+img = _images(vision, cfg, traj.r, torch.arange(len(r0)), torch.full((len(r0),), t))  # (B, N, 4, 12, 128)
+print("CNN input of one swarm at t = 10:", tuple(img[0].shape), "(N, C, H, W)")
+fig, axes = plt.subplots(4, 1, figsize=(12, 4.2))
+for k, (ax, title) in enumerate(zip(axes, ("gray I(t)", "depth I(t)", "5 (gray difference)", "5 (depth difference)"))):
+    ax.imshow(img[0, 0, k], cmap="gray" if k < 2 else "RdBu", vmin=0 if k < 2 else -1, vmax=1, aspect="auto")
+    ax.set_ylabel(title, rotation=0, ha="right", fontsize=9), ax.set_xticks([]), ax.set_yticks([])
+plt.tight_layout()
+plt.show()
+
+# %% [markdown]
+# ## 2. The architecture
+#
+# | stage | operation | output |
+# |---|---|---|
+# | stem | 3×3 convolution, 4 → 8 channels, stride 2 along rows only | 8 × 6 × 128 |
+# | block 1 | residual block, 3×3, then average **all 6 rows** into one | 8 × 1 × 128 |
+# | blocks 2-4 | residual blocks along the columns (1×3), 8 → 16 → 16 → 16 | 16 × 1 × 128 |
+# | fc | 2048 → 64 → $F$ = 24 | 24 |
+#
+# A residual block is $y = \mathrm{pool}_{rows}(\mathrm{relu}(\mathrm{conv}_2(\mathrm{relu}(\mathrm{conv}_1(x))) + \mathrm{skip}(x)))$.
+# Until the fully connected layers, column $k$ of every feature map still means "the bearing of
+# column $k$".
+
+# %%
+C, H, W = vision.image_shape(cfg)
+cnn = VisualCNN(C, H, W, F=24)
+print(cnn)
+n_params = sum(p.numel() for p in cnn.parameters() if p.requires_grad)
+print(f"parameters: {n_params:,} (of which {24 * 6 + 6} in the warm-start head); "
+      f"{cnn.flops_per_image() / 1e6:.1f} MFLOP per image")
+x = torch.randn(pick(1600, 200), C, H, W)
+t0 = time.perf_counter()
+with torch.no_grad():
+    cnn(x)
+fwd = len(x) / (time.perf_counter() - t0)
+t0 = time.perf_counter()
+cnn(x).sum().backward()
+fb = len(x) / (time.perf_counter() - t0)
+print(f"throughput on this CPU: {fwd:,.0f} images/s forward, {fb:,.0f} images/s forward + backward")
+
+# %% [markdown]
+# **Why pool only along the vertical axis.** All drones fly at one altitude: in every image they
+# sit on the horizon, and the vertical axis carries only how tall a drone looks, i.e. how near it is,
+# which the rows can give up after one block. The horizontal axis is the bearing: where a neighbour
+# is. Pooling columns would blur exactly the quantity the controller needs (the direction of the
+# repulsion, the direction of a neighbour's motion), so the columns survive until the fully connected
+# layers, whose weights can then be different for every bearing. A test checks the trunk's output:
+# all rows pooled away, all 128 columns kept.
+
+# %%
+with torch.no_grad():
+    maps = cnn.blocks[0](torch.relu(cnn.stem(img[0, :1])))  # block 1's output for agent 0
+print("after block 1:", tuple(maps.shape), "-> one row per channel, 128 bearings")
+
+# %% [markdown]
+# ## 3. Visual state estimation
+#
+# What should $\mathbf x_i(t)$ contain? A good start is what the DAGNN used: the six exact local
+# features (relative velocities and the two repulsion sums). We train the CNN, through a small linear
+# head on its $F = 24$ outputs, to **regress the six features** from images of expert flights: the
+# "visual state estimation" stage, and the first stage of VGAI's training in notebook 06.
+#
+# The book ships two estimators trained for 3,000 steps (8 swarm states, i.e. 400 images, per step)
+# on 40 expert episodes: one sees **two frames** (the default), one a **single frame**. Regenerate
+# them with `python -m vgai_lite train-vgai --estimators --retrain` (about 5 minutes each). In quick
+# mode we also train a miniature one from scratch:
+
+# %%
+if QUICK:
+    tiny, losses, sec = train_state_estimator(cfg.replace(T=20), vision, steps=3, states=1, episodes=1, progress=False)
+    print(f"miniature estimator: {len(losses)} steps in {sec:.1f} s")
+
+estimators = {"two frames (g = 5)": book_estimator("estimator_motion", progress=False),
+              "single frame": book_estimator("estimator_single", progress=False)}
+for name, (_, _, meta) in estimators.items():
+    print(f"{name}: trained in {meta['seconds']:.0f} s")
+
+# %% [markdown]
+# How well does each estimate each feature? Correlation with the exact features on held-out expert
+# flights, at a few time steps (at $t = 2$ the "earlier" frame is only 2 steps old: an episode's first
+# frames carry little motion):
+
+# %%
+rows = []
+for name, (est, vis, _) in estimators.items():
+    quality = estimator_quality(est, vis, cfg, episodes=pick(8, 2))
+    for t, q in quality.items():
+        rows.append(f"| {name} | {t} | " + " | ".join(f"{x:.2f}" for x in q) + " |")
+display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|---|---|" + "---|" * 6 + "\n" + "\n".join(rows)))
+
+# %% [markdown]
+# The repulsion features (where the neighbours are) are visible in a single frame. The relative
+# velocities $\sum_j (\mathbf v_i - \mathbf v_j)$ are not: a single frame cannot tell a drone flying
+# towards you from one flying away, and the estimator can only guess them from the positions. With
+# two frames the motion of every neighbour is in the image, and the velocity features become
+# estimable; they are the ones the expert's action depends on most.
+
+# %%
+est, vis, _ = estimators["two frames (g = 5)"]
+t = 20
+imgs = _images(vis, cfg, traj.r, torch.arange(len(r0)), torch.full((len(r0),), t))
+with torch.no_grad():
+    pred = est.estimate_local_features(imgs.flatten(0, 1))
+exact = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
+fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+for ax, k in zip(axes, (0, 2, 4)):
+    ax.scatter(exact[:, k], pred[:, k], s=5, alpha=0.5)
+    lim = [exact[:, k].min().item(), exact[:, k].max().item()]
+    ax.plot(lim, lim, color="0.5", lw=0.8)
+    ax.set_xlabel(f"exact {FEATURE_NAMES[k]}"), ax.set_ylabel("estimated from images")
+fig.suptitle(f"two-frame estimator at t = {t}, held-out expert flights")
+plt.tight_layout()
+plt.show()
+
+# %% [markdown]
+# ## 4. Where it looks
+#
+# The gradient of an estimated feature with respect to the input image shows which pixels it
+# depends on (a saliency map). For the relative-velocity feature $\sum_j (v_i - v_j)_x$, it concentrates
+# on the difference channels, around the neighbours:
+
+# %%
+agent = 0
+x_img = imgs[0, agent:agent + 1].clone().requires_grad_(True)
+est.estimate_local_features(x_img)[0, 0].backward()
+sal = x_img.grad[0].abs()
+fig, axes = plt.subplots(5, 1, figsize=(12, 5.5))
+axes[0].imshow(imgs[0, agent, 0], cmap="gray", vmin=0, vmax=1, aspect="auto"), axes[0].set_ylabel("gray", rotation=0, ha="right")
+for k, ax in enumerate(axes[1:]):
+    ax.imshow(sal[k], cmap="hot", aspect="auto")
+    ax.set_ylabel(("gray", "depth", "Δ gray", "Δ depth")[k] + " saliency", rotation=0, ha="right", fontsize=9)
+for ax in axes:
+    ax.set_xticks([]), ax.set_yticks([])
+plt.tight_layout()
+plt.show()
+print("share of the saliency on the two difference channels:", f"{(sal[2:].sum() / sal.sum()).item():.0%}")
+
+# %% [markdown]
+# ## 5. Exercise 05.1: a residual block that pools rows only
+#
+# Write `MyResidualBlock(c_in, c_out, pool)`: two 3×3 convolutions (padding 1) with a ReLU between,
+# a skip connection (a 1×1 convolution when `c_in != c_out`), a ReLU, then average pooling of `pool`
+# rows into one, leaving the columns untouched. Input `(M, c_in, H, W)`, output `(M, c_out, H / pool, W)`.
+
+# %%
+from torch import nn
+
+from vgai_lite.exercises import check_residual_block
+
+
+class MyResidualBlock(nn.Module):
+    def __init__(self, c_in, c_out, pool):
+        super().__init__()
+        ### BEGIN SOLUTION
+        self.conv1 = nn.Conv2d(c_in, c_out, 3, padding=1)
+        self.conv2 = nn.Conv2d(c_out, c_out, 3, padding=1)
+        self.skip = nn.Conv2d(c_in, c_out, 1) if c_in != c_out else nn.Identity()
+        self.pool = nn.AvgPool2d((pool, 1))
+        ### END SOLUTION
+
+    def forward(self, x):
+        ### BEGIN SOLUTION
+        y = self.conv2(torch.relu(self.conv1(x)))
+        return self.pool(torch.relu(y + self.skip(x)))
+        ### END SOLUTION
+
+
+check_residual_block(MyResidualBlock);
+
+# %% [markdown]
+# ## Next
+#
+# Notebook 06 puts the CNN in front of the DAGNN's aggregation and trains both together, end to end,
+# by imitation of the expert with K-step backpropagation through time.
