@@ -1,5 +1,7 @@
 """VGAI (sections 3.3-3.4): the CNN's vertical-only pooling, pure vision, locality, any N, checkpoints."""
 
+import dataclasses
+
 import pytest
 import torch
 
@@ -36,13 +38,29 @@ def test_the_cnn_keeps_every_column_until_the_fully_connected_layers():
 
 
 def test_vgai_sees_only_images_not_velocities():
-    c = make_vgai()
+    """After an episode's first call (where the camera model draws the frames recorded before t = 0),
+    the velocities passed to the controller never matter; without prehistory, never at all."""
     r, v = sample_initial_state(CFG, 2, torch.Generator().manual_seed(0), dtype=torch.float64)
-    c.reset()
-    u1 = c(r, v)
-    c.reset()
-    u2 = c(r, torch.randn_like(v) * 10)
-    torch.testing.assert_close(u1, u2)
+    for prehistory in (True, False):
+        c = make_vgai(vision=dataclasses.replace(VISION, prehistory=prehistory))
+        actions = []
+        for noise in (0.0, 10.0):
+            c.reset()
+            c(r, v if prehistory else v + noise)
+            actions.append(torch.stack([c(r + 0.01 * k, v + noise * torch.randn_like(v)) for k in range(1, 4)]))
+        torch.testing.assert_close(actions[0], actions[1])
+
+
+def test_prehistory_frames_are_the_initial_state_flown_backwards():
+    from vgai_lite.bptt import _images
+
+    vision = VISION
+    cfg = CFG.replace(T=8)
+    r0, v0 = sample_initial_state(cfg, 1, torch.Generator().manual_seed(3), dtype=torch.float64)
+    traj = rollout(make_vgai(vision=vision), cfg, r0, v0)
+    img = _images(vision, cfg, traj.r, traj.v, torch.tensor([0]), torch.tensor([2]))
+    earlier = vision.frame(r0 + (2 - vision.motion_gap) * cfg.Ts * v0, cfg)
+    torch.testing.assert_close(img, vision.combine(vision.frame(traj.r[2], cfg), earlier), atol=1e-5, rtol=1e-5)
 
 
 def test_vgai_is_permutation_equivariant_over_a_rollout():
@@ -74,7 +92,7 @@ def test_motion_frames_change_the_input_only_when_something_moves():
     r, _ = sample_initial_state(CFG, 1, torch.Generator().manual_seed(0), dtype=torch.float64)
     c.reset()
     for _ in range(vision.motion_gap + 1):
-        X_still = c.features(r)
+        X_still = c.features(r, torch.zeros_like(r))  # hovering: the frames before t = 0 are the same
     C0 = len(vision.render.channels)
     img = vision.combine(vision.frame(r, CFG), vision.frame(r, CFG))
     assert img.shape[2] == 2 * C0 and img[:, :, C0:].abs().max() == 0  # difference channels empty

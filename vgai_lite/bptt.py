@@ -69,13 +69,13 @@ class VGAITrainConfig:
     cnn_hidden: int = 64
     vision: VisionConfig = VisionConfig()
     expert_episodes: int = 40
-    dagger_rounds: int = 3
+    dagger_rounds: int = 4
     episodes_per_round: int = 16
     p_learner: float = 0.33
     warm_steps: int = 3000
     warm_states: int = 8
     mlp_epochs: int = 4
-    joint_steps: int = 300
+    joint_steps: int = 600
     windows: int = 4
     lr: float = 1e-3
     early_steps: int = 50
@@ -136,14 +136,19 @@ def _sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> 
     return torch.where(early, t_early, t_any)
 
 
-def _images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, e: torch.Tensor,
+def _images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor, e: torch.Tensor,
             t: torch.Tensor) -> torch.Tensor:
-    """CNN inputs of every agent at stored states (e, t): (M, N, C, H, W), motion frame at t - g."""
+    """CNN inputs of every agent at stored states (e, t): (M, N, C, H, W), motion frame at t - g
+    (before t = 0: the initial state flown backwards, if vision.prehistory; else the first frame)."""
     now = vision.frame(r[t, e], cfg)
     if vision.motion_gap == 0:
         return now
-    earlier = vision.frame(r[(t - vision.motion_gap).clamp(min=0), e], cfg)
-    return vision.combine(now, earlier)
+    t_prev = t - vision.motion_gap
+    r_prev = r[t_prev.clamp(min=0), e]
+    if vision.prehistory:
+        back = (t_prev.clamp(max=0) * cfg.Ts).to(r.dtype)[:, None, None]  # <= 0: seconds before t = 0
+        r_prev = torch.where((t_prev < 0)[:, None, None], r[0, e] + back * v[0, e], r_prev)
+    return vision.combine(now, vision.frame(r_prev, cfg))
 
 
 def feature_scale(cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -167,7 +172,7 @@ def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, 
     for _ in tqdm(range(steps), desc="visual state estimation", disable=not progress):
         e = torch.randint(0, E, (states,), generator=gen)
         t = _sample_times(states, T, tcfg, gen)
-        img = _images(vision, cfg, r, e, t)
+        img = _images(vision, cfg, r, v, e, t)
         target = (local_features(r[t, e], v[t, e], cfg.R) - x_mean) / x_std
         loss = nnf.l1_loss(cnn.aux(cnn(img.flatten(0, 1))), target.flatten(0, 1))
         opt.zero_grad(set_to_none=True)
@@ -191,7 +196,7 @@ def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, ep
     out = {}
     for t in times:
         e, tt = torch.arange(episodes), torch.full((episodes,), t)
-        pred = cnn.aux(cnn(_images(vision, cfg, traj.r, e, tt).flatten(0, 1)))
+        pred = cnn.aux(cnn(_images(vision, cfg, traj.r, traj.v, e, tt).flatten(0, 1)))
         X = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
         out[t] = [torch.corrcoef(torch.stack((pred[:, k], X[:, k])))[0, 1].item() for k in range(6)]
     return out
@@ -246,7 +251,7 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
     model.eval()
     with torch.no_grad():
         S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
-        X = torch.stack([cnn(_images(vision, cfg, r, torch.arange(E), torch.full((E,), t)).flatten(0, 1))
+        X = torch.stack([cnn(_images(vision, cfg, r, v, torch.arange(E), torch.full((E,), t)).flatten(0, 1))
                          .view(E, cfg.N, -1) for t in range(T)])  # (T, E, N, F)
         Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
     keep_t = torch.cat((torch.arange(min(tcfg.early_steps, T)), torch.arange(tcfg.early_steps, T, 4)))
@@ -288,7 +293,7 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
             valid = (tau >= 0).float()
             tau_c = tau.clamp(min=0)
             ee = e[:, None].expand_as(tau)
-            img = _images(vision, cfg, r, ee.flatten(), tau_c.flatten())  # (windows K, N, C, H, W)
+            img = _images(vision, cfg, r, v, ee.flatten(), tau_c.flatten())  # (windows K, N, C, H, W)
             Xw = cnn(img.flatten(0, 1)).view(tcfg.windows, K, cfg.N, tcfg.F) * valid[:, :, None, None]
             Sw = gso(adjacency(r[tau_c.flatten(), ee.flatten()], cfg.R), tcfg.gso).view(tcfg.windows, K, cfg.N, cfg.N)
             Sw = Sw * valid[:, :, None, None]

@@ -276,3 +276,30 @@ def check_residual_block(student_cls: Callable) -> CheckResult:
         return True, "right output shapes, rows pooled, columns kept, and a column only sees its neighbours."
 
     return _run("residual block with vertical-only pooling", body)
+
+
+def check_dagger_mix(student_fn: Callable) -> CheckResult:
+    """Exercise 06.1: ``student_fn(u_learner, u_expert, p, generator) -> u`` applies, for each swarm
+    (the first axis), the learner's actions with probability p and the expert's otherwise (DAgger's
+    mixing rule, paper: p = 0.33). u_learner, u_expert: (B, N, 2)."""
+    def body():
+        g = _fresh_generator()
+        B, N = 4000, 5
+        u_l = torch.randn(B, N, 2, generator=g, dtype=torch.float64)
+        u_e = torch.randn(B, N, 2, generator=g, dtype=torch.float64) + 10.0
+        for p in (0.0, 0.33, 1.0):
+            gen = torch.Generator().manual_seed(int(torch.randint(0, 2 ** 31, (1,), generator=g)))
+            got = _as_tensor(student_fn(u_l.clone(), u_e.clone(), p, gen), u_l.shape, "the applied actions")
+            is_l = (got == u_l).all(dim=-1)
+            is_e = (got == u_e).all(dim=-1)
+            if not (is_l | is_e).all():
+                return False, "every agent's action must be exactly the learner's or the expert's, not a blend."
+            whole = is_l.all(dim=1) | is_e.all(dim=1)
+            if not whole.all():
+                return False, "draw one coin per swarm and step: a swarm follows one policy as a whole."
+            share = is_l.all(dim=1).double().mean().item()
+            if abs(share - p) > 0.03:
+                return False, f"with p = {p} your swarms followed the learner {share:.0%} of the time."
+        return True, "one coin per swarm, learner with probability p, expert otherwise."
+
+    return _run("DAgger mixing rule", body)

@@ -223,12 +223,19 @@ class VisionConfig:
             A single frame shows positions only; the expert's action is dominated by velocity
             alignment, visible only across frames.
         motion_mode: "difference" ([I(t), 5 (I(t) - I(t-g))]) or "stack" ([I(t), I(t-g)]).
+        prehistory: the episode starts mid-flight, with the cameras already running: the frames
+            before t = 0 are rendered from the initial state flown backwards at its constant initial
+            velocity, r(-k) = r(0) - k Ts v(0). Without it an agent is blind to motion for its first
+            g steps, exactly when the expert acts hardest (80 % of eq. 1 accrues in the first 10
+            steps). The velocities serve only the camera model, once, to draw those frames: they never
+            reach the CNN except as pixels. False: the first frame stands in for the missing ones.
     """
 
     view: str = "egocentric"
     render: RenderConfig = RenderConfig(view_height=12, view_width=32)
     motion_gap: int = 5
     motion_mode: str = "difference"
+    prehistory: bool = True
 
     def __post_init__(self) -> None:
         if self.view not in VIEWS:
@@ -268,17 +275,17 @@ class VisionConfig:
         rd = dict(d["render"])
         rd["channels"] = tuple(rd["channels"])
         return VisionConfig(view=d["view"], render=RenderConfig(**rd), motion_gap=d["motion_gap"],
-                            motion_mode=d["motion_mode"])
+                            motion_mode=d["motion_mode"], prehistory=d.get("prehistory", False))
 
 
 class VGAIController:
     """VGAI as a controller: images -> CNN -> delayed aggregation -> MLP -> u, for any N.
 
-    At each call every agent renders its own view of the positions r (its camera; the velocities
-    ``v`` are ignored: pure vision), pairs it with its frame of g steps ago, the CNN gives x_i(t),
-    the buffer builds Z(t) from the neighbours' past messages, and the MLP gives u_i(t), saturated.
-    ``reset()`` clears the buffer and the frame memory (before the first g steps, the earliest
-    frame stands in for the missing ones).
+    At each call every agent renders its own view of the positions r (its camera), pairs it with
+    its frame of g steps ago, the CNN gives x_i(t), the buffer builds Z(t) from the neighbours' past
+    messages, and the MLP gives u_i(t), saturated. Pure vision: the velocities ``v`` are ignored,
+    except at an episode's first call, where the camera model uses them to draw the frames recorded
+    before t = 0 (``VisionConfig.prehistory``). ``reset()`` clears the buffer and the frame memory.
     """
 
     name = "VGAI"
@@ -303,10 +310,15 @@ class VGAIController:
         self.buffer.reset()
         self.frames = []
 
-    def features(self, r: torch.Tensor) -> torch.Tensor:
+    def features(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
         """X(t) from the agents' images, (B, N, F); keeps the frames needed for motion."""
         now = self.vision.frame(r, self.cfg)
         g = self.vision.motion_gap
+        if not self.frames and g > 0 and self.vision.prehistory:
+            if v is None:
+                raise ValueError("the first call of an episode needs v to draw the frames before t = 0 "
+                                 "(VisionConfig.prehistory); pass it, or use prehistory=False")
+            self.frames = [self.vision.frame(r - k * self.cfg.Ts * v, self.cfg) for k in range(g, 0, -1)]
         self.frames.append(now)
         if len(self.frames) > g + 1:
             self.frames.pop(0)
@@ -316,7 +328,7 @@ class VGAIController:
 
     def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
         S = gso(adjacency(r, self.cfg.R), self.gso_kind)
-        Z = self.buffer.push(self.features(r), S)
+        Z = self.buffer.push(self.features(r, v), S)
         return saturate(self.model.mlp(Z), self.cfg)
 
     def spec(self) -> dict:

@@ -44,7 +44,7 @@ print(vision)
 r0, v0 = sample_initial_state(cfg, pick(8, 2), torch.Generator().manual_seed(EVAL_SEED))
 traj = rollout(ExpertController(cfg), cfg, r0, v0)
 t = 10
-img = _images(vision, cfg, traj.r, torch.arange(len(r0)), torch.full((len(r0),), t))  # (B, N, 4, 12, 128)
+img = _images(vision, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))  # (B, N, 4, 12, 128)
 print("CNN input of one swarm at t = 10:", tuple(img[0].shape), "(N, C, H, W)")
 fig, axes = plt.subplots(4, 1, figsize=(12, 4.2))
 for k, (ax, title) in enumerate(zip(axes, ("gray I(t)", "depth I(t)", "5 (gray difference)", "5 (depth difference)"))):
@@ -144,7 +144,7 @@ display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|-
 # %%
 est, vis, _ = estimators["two frames (g = 5)"]
 t = 20
-imgs = _images(vis, cfg, traj.r, torch.arange(len(r0)), torch.full((len(r0),), t))
+imgs = _images(vis, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))
 with torch.no_grad():
     pred = est.estimate_local_features(imgs.flatten(0, 1))
 exact = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
