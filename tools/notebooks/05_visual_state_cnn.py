@@ -135,11 +135,16 @@ for name, (est, vis, _) in estimators.items():
 display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|---|---|" + "---|" * 6 + "\n" + "\n".join(rows)))
 
 # %% [markdown]
-# The repulsion features (where the neighbours are) are visible in a single frame. The relative
-# velocities $\sum_j (\mathbf v_i - \mathbf v_j)$ are not: a single frame cannot tell a drone flying
-# towards you from one flying away, and the estimator can only guess them from the positions. With
-# two frames the motion of every neighbour is in the image, and the velocity features become
-# estimable; they are the ones the expert's action depends on most.
+# Read the table by columns. The repulsion features (where the neighbours are) are visible in a single
+# frame, and both estimators get them almost exactly. The relative velocities
+# $\sum_j (\mathbf v_i - \mathbf v_j)$ are another matter. A single frame cannot show motion, so the
+# single-frame estimator can only *infer* velocities from the configuration: in an expert flight that
+# becomes possible after a while (neighbours that came close are being pushed apart), but not at the
+# start of an episode, exactly when the expert acts hardest and most of eq. 1 accrues. With two frames
+# the motion of every neighbour is in the image from the first step (the frames before $t = 0$ are
+# drawn from the initial state flown backwards, `VisionConfig.prehistory`), and the velocity features
+# are estimated from the start. Late in an episode, when the swarm has flocked, relative velocities are
+# tiny and hard to see in either case; they also matter little then.
 
 # %%
 est, vis, _ = estimators["two frames (g = 5)"]
