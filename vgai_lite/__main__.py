@@ -153,7 +153,7 @@ def cmd_train_vgai(args, extra):
             for t, q in meta["quality"].items():
                 print(f"  t = {t:>3}: " + " ".join(f"{x:5.2f}" for x in q))
     for name in args.names:
-        controller, result = book_vgai(name, retrain=args.retrain, episodes=args.episodes)
+        controller, result = book_vgai(name, retrain=args.retrain, episodes=args.episodes, write_json=True)
         print(result)
         print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote data/vgai/{name}.pt and .json")
     if not args.names and not args.estimators:

@@ -254,7 +254,8 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
         X = torch.stack([cnn(_images(vision, cfg, r, v, torch.arange(E), torch.full((E,), t)).flatten(0, 1))
                          .view(E, cfg.N, -1) for t in range(T)])  # (T, E, N, F)
         Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
-    keep_t = torch.cat((torch.arange(min(tcfg.early_steps, T)), torch.arange(tcfg.early_steps, T, 4)))
+    early = min(tcfg.early_steps, T)
+    keep_t = torch.cat((torch.arange(early), torch.arange(early, T, 4)))  # every early step, 1 in 4 later
     Zr = Z[:, keep_t].reshape(-1, tcfg.K, tcfg.F)
     Ur = u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
     model.mlp.set_normalization(Zr)
@@ -394,9 +395,12 @@ VGAI_RUNS: dict[str, VGAITrainConfig] = {
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
 
-def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True):
-    """Load (or train, about 15-20 minutes) the book's VGAI ``name``, evaluate it on ``episodes``
-    held-out episodes and write data/vgai/NAME.pt and NAME.json. Returns (controller, RelativeCost)."""
+def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
+              write_json: bool = False):
+    """Load (or train, about half an hour) the book's VGAI ``name`` and evaluate it on ``episodes``
+    held-out episodes. Writes data/vgai/NAME.json with the evaluation when it trained the model or
+    when ``write_json`` (the command line's train-vgai does), so that a notebook run in quick mode
+    never overwrites the shipped record. Returns (controller, RelativeCost)."""
     from .book import DATA_DIR, EVAL_SEED
     from .checkpoints import load_controller, read_checkpoint
     from .imitation import write_evaluation
@@ -413,9 +417,11 @@ def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bo
             controller = load_controller(path)
     if controller is None:
         controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress)
+        write_json = True
     result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
     hist = controller.meta["history"]
-    write_evaluation(path.with_suffix(".json"), result, cfg,
-                     extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
-                            "validation": hist["rounds"]})
+    if write_json:
+        write_evaluation(path.with_suffix(".json"), result, cfg,
+                         extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
+                                "validation": hist["rounds"]})
     return controller, result

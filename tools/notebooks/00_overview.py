@@ -34,7 +34,7 @@
 # | **06** VGAI | CNN and DAGNN trained jointly, K-step backpropagation through time | §3.4, Fig. 3 |
 # | **07** experiments | the paper's tables regenerated, the paper's numbers beside ours | §4 |
 #
-# Notebooks 00-04 are written; 05-07 (the visual CNN, VGAI and the experiments) are being written.
+# Notebooks 00-06 are written; 07 (the paper's tables regenerated with one command) is being written.
 #
 # ## How to use the book
 #

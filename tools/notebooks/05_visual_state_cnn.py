@@ -108,7 +108,7 @@ print("after block 1:", tuple(maps.shape), "-> one row per channel, 128 bearings
 #
 # The book ships two estimators trained for 3,000 steps (8 swarm states, i.e. 400 images, per step)
 # on 40 expert episodes: one sees **two frames** (the default), one a **single frame**. Regenerate
-# them with `python -m vgai_lite train-vgai --estimators --retrain` (about 5 minutes each). In quick
+# them with `python -m vgai_lite train-vgai --estimators --retrain` (minutes each; see below). In quick
 # mode we also train a miniature one from scratch:
 
 # %%
@@ -167,8 +167,9 @@ plt.show()
 # ## 4. Where it looks
 #
 # The gradient of an estimated feature with respect to the input image shows which pixels it
-# depends on (a saliency map). For the relative-velocity feature $\sum_j (v_i - v_j)_x$, it concentrates
-# on the difference channels, around the neighbours:
+# depends on (a saliency map). For the relative-velocity feature $\sum_j (v_i - v_j)_x$ the saliency
+# gathers in the columns where the neighbours are, nearest ones first, on all four channels: the
+# current frame says where a neighbour is and how far, the difference channels how it moved.
 
 # %%
 agent = 0
