@@ -47,7 +47,6 @@ def cmd_lab(args, extra):
 
 
 def cmd_evaluate(args, extra):
-    import torch
 
     from .controllers import LocalController
     from .evaluate import relative_cost

@@ -333,8 +333,6 @@ for name, traj in trajs.items():
 # with the local swarm's mean number of neighbours at the end of the episode:
 
 # %%
-from vgai_lite.flocking import pairwise_offsets
-
 rows = []
 for rho in (0.3, 0.5, 0.75, 1.0):
     c = cfg.replace(rho=rho)

@@ -15,7 +15,6 @@
 # larger teams; and what the cost of eq. 1 does *not* measure.
 
 # %%
-import json
 import time
 
 import matplotlib.pyplot as plt
@@ -26,9 +25,8 @@ from IPython.display import Markdown, display
 from vgai_lite import (ExpertController, FlockConfig, LocalController, relative_cost, rollout,
                        sample_initial_state)
 from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick
-from vgai_lite.checkpoints import load_controller
 from vgai_lite.features import FEATURE_NAMES, local_features
-from vgai_lite.imitation import BOOK_RUNS, DAGNNTrainConfig, collect, load_or_train, train_dagnn
+from vgai_lite.imitation import BOOK_RUNS, DAGNNTrainConfig, load_or_train, train_dagnn
 from vgai_lite.models import AggregationMLP, DAGNNController
 
 torch.set_num_threads(2)

@@ -24,7 +24,7 @@ from IPython.display import HTML, Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, rollout, sample_initial_state
 from vgai_lite.book import EVAL_SEED, QUICK, pick
-from vgai_lite.physics import column_bearings, raycast_depth, rollout_pymunk
+from vgai_lite.physics import raycast_depth, rollout_pymunk
 from vgai_lite.render import (CAMERAS, RenderConfig, bearing_to_column, column_layers, egocentric_depth,
                               render_egocentric, render_topdown, with_motion)
 from vgai_lite.viz import animate_views, animation_html, draw_swarm

@@ -15,8 +15,6 @@
 # velocities passed to it do.)
 
 # %%
-import time
-
 import matplotlib.pyplot as plt
 import numpy as np
 import torch
@@ -24,7 +22,7 @@ from IPython.display import HTML, Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick
-from vgai_lite.bptt import VGAI_RUNS, VGAITrainConfig, book_vgai, train_vgai
+from vgai_lite.bptt import VGAITrainConfig, book_vgai, train_vgai
 from vgai_lite.imitation import BOOK_RUNS, load_or_train
 
 torch.set_num_threads(2)
