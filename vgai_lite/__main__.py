@@ -7,6 +7,9 @@
   benchmark  agent-steps per second of the simulator
   train-dagnn  train (or load) the book's DAGNN baselines, evaluate them, write data/dagnn/
   train-vgai   train (or load) the book's VGAI and visual state estimators, write data/vgai/
+  reproduce    the paper's tables (F, K, v_init, R, N'): train what is missing, evaluate, data/results/
+  student-copies  write the notebooks with every exercise's solution replaced by a stub
+  grade        execute a student's notebook in quick mode and score its exercises (JSON)
 """
 
 from __future__ import annotations
@@ -159,6 +162,31 @@ def cmd_train_vgai(args, extra):
         raise SystemExit(f"name a run ({sorted(VGAI_RUNS)}) or --estimators")
 
 
+def cmd_student_copies(args, extra):
+    from .course import make_student_copies
+
+    for path in make_student_copies(args.out, args.source):
+        print("wrote", path)
+
+
+def cmd_grade(args, extra):
+    from .course import grade_notebook
+
+    failed = False
+    for nb in args.notebooks:
+        report = grade_notebook(nb, out=args.out, notebook=args.notebook, quick=not args.full,
+                                timeout=args.timeout)
+        print(f"{report['notebook']}: {report['score']}/{report['max_score']} in {report['seconds']:.0f} s")
+        for k, e in report["exercises"].items():
+            print(f"  {k} {'PASSED' if e['passed'] else 'NOT PASSED'}: {e['message']}")
+        for e in report["cell_errors"]:
+            print(f"  cell {e['cell']} raised {e['error']}")
+        if "written_to" in report:
+            print("  wrote", report["written_to"])
+        failed |= report["score"] < report["max_score"]
+    return 1 if (failed and args.strict) else 0
+
+
 def cmd_benchmark(args, extra):
     from . import benchmark
 
@@ -199,12 +227,23 @@ def main(argv=None):
     p.add_argument("--retrain", action="store_true")
     p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
     p.add_argument("--threads", type=int, default=2)
+    p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
+    p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
+    p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")
+    p = sub.add_parser("grade", help="execute notebooks (quick mode) and score their exercises")
+    p.add_argument("notebooks", nargs="+", help="notebook files named NN_*.ipynb")
+    p.add_argument("--out", default=None, help="folder (or .json file) for the JSON report(s)")
+    p.add_argument("--notebook", default=None, help="the book notebook's number, if the file name lacks it")
+    p.add_argument("--full", action="store_true", help="run in full mode instead of quick mode")
+    p.add_argument("--timeout", type=int, default=600, help="seconds allowed per cell")
+    p.add_argument("--strict", action="store_true", help="exit with status 1 unless every exercise passed")
     args, extra = parser.parse_known_args(argv)
     if extra and args.command != "lab":
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
-    {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
+    return {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
      "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn,
-     "train-vgai": cmd_train_vgai}[args.command](args, extra)
+     "train-vgai": cmd_train_vgai, "student-copies": cmd_student_copies,
+     "grade": cmd_grade}[args.command](args, extra)
 
 
 if __name__ == "__main__":

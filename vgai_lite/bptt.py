@@ -391,6 +391,10 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
     "vgai_F24": VGAITrainConfig(),   # the paper's default: F = 24, K - 1 = 3, egocentric, two frames
+    "vgai_F6": VGAITrainConfig(F=6),     # Table 1a: as many features as the DAGNN's exact ones
+    "vgai_F12": VGAITrainConfig(F=12),   # Table 1a
+    "vgai_K2": VGAITrainConfig(K=2),     # Table 1b: K - 1 = 1 exchange
+    "vgai_K3": VGAITrainConfig(K=3),     # Table 1b: K - 1 = 2 exchanges
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 

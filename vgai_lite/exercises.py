@@ -8,6 +8,7 @@ answer gives a message, not a broken notebook.
 
 from __future__ import annotations
 
+import json
 import os
 import traceback
 from dataclasses import dataclass
@@ -33,7 +34,7 @@ class CheckResult:
 
     def __str__(self) -> str:
         mark = "PASSED" if self.passed else "NOT PASSED"
-        return f"[{mark}] {self.exercise}: {self.message}"
+        return f"[{mark}] exercise {self.exercise} ({EXERCISES.get(self.exercise, '?')}): {self.message}"
 
 
 def _fresh_generator() -> torch.Generator:
@@ -42,6 +43,53 @@ def _fresh_generator() -> torch.Generator:
 
 def _fmt(x: torch.Tensor) -> str:
     return "[" + ", ".join(f"{float(a):.4g}" for a in x.flatten()) + "]"
+
+
+EXERCISES: dict[str, str] = {
+    "01.1": "potential gradient (eq. 3)",
+    "01.2": "flocking cost (eq. 1)",
+    "02.1": "delayed aggregation sequence (eq. 6)",
+    "03.1": "local features (DAGNN input)",
+    "04.1": "pinhole column and apparent height",
+    "05.1": "residual block with vertical-only pooling",
+    "06.1": "DAgger mixing rule",
+}
+"""Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented."""
+
+GRADE_FILE_ENV = "VGAI_LITE_GRADE_FILE"
+"""When set (by ``python -m vgai_lite grade``), every check appends its result to this file as a JSON line."""
+
+RESULTS: dict[str, "CheckResult"] = {}
+"""The latest result of each exercise checked in this Python session, by id (read by ``score``)."""
+
+
+def exercises_of(notebook: str) -> list[str]:
+    """The exercise ids of notebook ``"NN"`` (e.g. "01" -> ["01.1", "01.2"])."""
+    if not (isinstance(notebook, str) and len(notebook) == 2 and notebook.isdigit()):
+        raise ValueError(f"notebook must be a two-digit string such as '01', got {notebook!r}")
+    return [k for k in EXERCISES if k.startswith(notebook + ".")]
+
+
+def _record(result: "CheckResult") -> None:
+    RESULTS[result.exercise] = result
+    path = os.environ.get(GRADE_FILE_ENV)
+    if path:
+        with open(path, "a") as f:
+            f.write(json.dumps({"exercise": result.exercise, "passed": result.passed,
+                                "message": result.message}) + "\n")
+
+
+def score(notebook: str) -> dict:
+    """Print and return this notebook's score from the checks run so far in this session:
+    {"score": passed, "max_score": number of exercises, "exercises": {id: passed}}."""
+    ids = exercises_of(notebook)
+    passed = {k: bool(RESULTS.get(k)) for k in ids}
+    for k in ids:
+        state = "PASSED" if passed[k] else ("NOT PASSED" if k in RESULTS else "NOT RUN")
+        print(f"  {k} {EXERCISES[k]:45s} {state}")
+    total = sum(passed.values())
+    print(f"Score for notebook {notebook}: {total}/{len(ids)}")
+    return {"score": total, "max_score": len(ids), "exercises": passed}
 
 
 def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
@@ -54,6 +102,7 @@ def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
         passed, message = False, (f"your function raised {type(exc).__name__}: {exc} "
                                   f"(line {tb.lineno}: {tb.line!r})")
     result = CheckResult(exercise, passed, message)
+    _record(result)
     print(result)
     return result
 
@@ -96,7 +145,7 @@ def check_potential_gradient(student_fn: Callable) -> CheckResult:
         return False, (f"at r_ij = {_fmt(r_ij[k])} (||r_ij|| = {dist[k]:.3f} m, rho = {rho:.2f} m) "
                        f"expected {_fmt(expected[k])}, got {_fmt(got[k])}.{hint}")
 
-    return _run("potential gradient (eq. 3)", body)
+    return _run("01.1", body)
 
 
 def check_flocking_cost(student_fn: Callable) -> CheckResult:
@@ -120,7 +169,7 @@ def check_flocking_cost(student_fn: Callable) -> CheckResult:
         return False, (f"for swarm b={k} of a random trajectory with T={T}, B={B}, N={N} expected "
                        f"{expected[k].item():.6g}, got {got[k].item():.6g}.{hint}")
 
-    return _run("flocking cost (eq. 1)", body)
+    return _run("01.2", body)
 
 
 def _random_swarm_sequence(g: torch.Generator, T: int, N: int, step: float = 0.1):
@@ -165,7 +214,7 @@ def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
         return False, (f"block k={k} (of K={K}) differs on a window with T={T}, N={N}: expected "
                        f"row 0 = {_fmt(expected[0, k])}, got {_fmt(got[0, k])}.{hint}")
 
-    return _run("delayed aggregation sequence (eq. 6)", body)
+    return _run("02.1", body)
 
 
 def check_local_features(student_fn: Callable) -> CheckResult:
@@ -194,7 +243,7 @@ def check_local_features(student_fn: Callable) -> CheckResult:
         return False, (f"agent {i} of a random swarm (N={N}, R={R:.2f} m): wrong {', '.join(wrong)}; "
                        f"expected {_fmt(expected[i])}, got {_fmt(got[i])}.{hint}")
 
-    return _run("local features (DAGNN input)", body)
+    return _run("03.1", body)
 
 
 def check_pinhole(student_fn: Callable) -> CheckResult:
@@ -234,7 +283,7 @@ def check_pinhole(student_fn: Callable) -> CheckResult:
                                f"{rcfg.vertical_fov_deg}°) expected height {h_exp:.4f} rows, got {h:.4f}.{hint}")
         return True, "columns and heights match the pinhole model on 20 random drones and cameras."
 
-    return _run("pinhole column and apparent height", body)
+    return _run("04.1", body)
 
 
 def check_residual_block(student_cls: Callable) -> CheckResult:
@@ -275,7 +324,7 @@ def check_residual_block(student_cls: Callable) -> CheckResult:
                                "local (3x3) and do not pool or mix across columns.")
         return True, "right output shapes, rows pooled, columns kept, and a column only sees its neighbours."
 
-    return _run("residual block with vertical-only pooling", body)
+    return _run("05.1", body)
 
 
 def check_dagger_mix(student_fn: Callable) -> CheckResult:
@@ -302,4 +351,4 @@ def check_dagger_mix(student_fn: Callable) -> CheckResult:
                 return False, f"with p = {p} your swarms followed the learner {share:.0%} of the time."
         return True, "one coin per swarm, learner with probability p, expert otherwise."
 
-    return _run("DAgger mixing rule", body)
+    return _run("06.1", body)

@@ -15,6 +15,14 @@
 #
 # Every constant lives in one object, `FlockConfig`; every function used here is in
 # `vgai_lite/` (click through: `flocking.py`, `controllers.py`, `evaluate.py`).
+#
+# **Learning objectives.** After this notebook you can simulate a batched double-integrator swarm with
+# the paper's initial conditions; compute the flocking cost (eq. 1) and the relative cost of every
+# table; explain what the expert (eq. 2-3) needs that a drone does not have.
+#
+# **You implement** the gradient of the collision potential (exercise 01.1) and the flocking cost
+# (exercise 01.2); an automatic check tells you at once whether it is right, and the last cell gives
+# your score.
 
 # %%
 import inspect
@@ -364,6 +372,7 @@ from vgai_lite.exercises import check_flocking_cost, check_potential_gradient
 
 def my_potential_gradient(r_ij, rho):
     ### BEGIN SOLUTION
+    # HINT: work with d2 = ||r_ij||^2 (sum over the last axis, keepdim); grad of 1/d2 is -2 r/d2^2, of log d2 is 2 r/d2; zero where d2 > rho^2
     d2 = (r_ij ** 2).sum(dim=-1, keepdim=True)
     grad = -2 * r_ij / d2 ** 2 - 2 * r_ij / d2
     return torch.where(d2 <= rho ** 2, grad, torch.zeros_like(grad))
@@ -379,6 +388,7 @@ check_potential_gradient(my_potential_gradient);
 # %%
 def my_flocking_cost(v):
     ### BEGIN SOLUTION
+    # HINT: subtract the swarm's mean velocity (mean over agents, dim=2), square, sum x and y, average over agents, sum over time
     vbar = v.mean(dim=2, keepdim=True)
     return ((v - vbar) ** 2).sum(dim=-1).mean(dim=2).sum(dim=0)
     ### END SOLUTION
@@ -397,3 +407,14 @@ check_flocking_cost(my_flocking_cost);
 # Notebook 02 introduces the communication graph and the **delayed aggregation sequence** that lets
 # an agent hear, with delay, from agents several hops away, the ingredient that lets a learned
 # decentralized controller close most of that gap.
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
+# the same checks: `python -m vgai_lite grade`, see the README).
+
+# %%
+from vgai_lite.exercises import score
+
+score("01");

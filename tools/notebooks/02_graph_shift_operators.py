@@ -12,6 +12,13 @@
 # 3. $k$-hop neighbourhoods;
 # 4. the **delayed aggregation sequence** $\mathbf Z(t)$ (eq. 6), how each drone builds it, and why
 #    the information it holds is *late*.
+#
+# **Learning objectives.** After this notebook you can build the communication graph and its graph
+# shift operators; show that S X needs one exchange with one-hop neighbours; say which information the
+# delayed aggregation sequence holds, and how late.
+#
+# **You implement** the delayed aggregation sequence Z(t) of eq. 6 (exercise 02.1); an automatic check
+# tells you at once whether it is right, and the last cell gives your score.
 
 # %%
 import matplotlib.pyplot as plt
@@ -211,6 +218,7 @@ from vgai_lite.exercises import check_aggregation_sequence
 
 def my_aggregation_sequence(X, S, K):
     ### BEGIN SOLUTION
+    # HINT: block k starts from X[t - k] and is multiplied by S[t-k+1], ..., S[t] in that order (zeros if t - k < 0); torch.stack(blocks, dim=1)
     T = X.shape[0]
     t = T - 1
     blocks = []
@@ -233,3 +241,14 @@ check_aggregation_sequence(my_aggregation_sequence);
 #
 # Notebook 03 feeds $\mathbf z_i(t)$, built from six exact local features, to a small neural network
 # shared by all agents, and trains it to imitate the expert: the paper's DAGNN baseline.
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
+# the same checks: `python -m vgai_lite grade`, see the README).
+
+# %%
+from vgai_lite.exercises import score
+
+score("02");

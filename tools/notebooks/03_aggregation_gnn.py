@@ -13,6 +13,13 @@
 # The plan: the features; the network; the imitation data; DAgger; training; evaluation against
 # the expert and the local heuristic; the number of exchanges $K-1$ (Table 1b); the choice of GSO and
 # larger teams; and what the cost of eq. 1 does *not* measure.
+#
+# **Learning objectives.** After this notebook you can build the DAGNN's exact local features and
+# aggregation MLP; train it by imitation with DAgger; read the effect of the number of exchanges K-1
+# and of the GSO on the relative cost.
+#
+# **You implement** the six local features a drone measures from its neighbours (exercise 03.1); an
+# automatic check tells you at once whether it is right, and the last cell gives your score.
 
 # %%
 import time
@@ -324,6 +331,7 @@ from vgai_lite.exercises import check_local_features
 
 def my_local_features(r, v, R):
     ### BEGIN SOLUTION
+    # HINT: r_ij = r[:, None] - r[None, :] gives all offsets at once; mask the neighbours (d^2 <= R^2, not i itself) before dividing
     r_ij = r[:, None, :] - r[None, :, :]                    # (N, N, 2): r_i - r_j
     v_ij = v[:, None, :] - v[None, :, :]
     d2 = (r_ij ** 2).sum(-1)
@@ -342,3 +350,14 @@ check_local_features(my_local_features);
 #
 # The DAGNN knows its neighbours' relative positions and velocities exactly. A drone with a camera
 # does not: notebook 04 renders what each drone *sees*, and notebooks 05-06 learn to fly from that.
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
+# the same checks: `python -m vgai_lite grade`, see the README).
+
+# %%
+from vgai_lite.exercises import score
+
+score("03");

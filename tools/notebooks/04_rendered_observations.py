@@ -12,6 +12,14 @@
 #
 # This notebook: the camera model; a drone's 360° panorama and its top-down alternative; motion in
 # images; the pymunk cross-checks; a 3-D view of a flight; speed.
+#
+# **Learning objectives.** After this notebook you can render a drone's 360° panorama and its top-down
+# alternative; relate a drone's bearing and distance to its column and apparent height; cross-check
+# the renderer against pymunk's ray caster.
+#
+# **You implement** the pinhole model: the column and apparent height of a drone in the panorama
+# (exercise 04.1); an automatic check tells you at once whether it is right, and the last cell gives
+# your score.
 
 # %%
 import math
@@ -250,6 +258,7 @@ from vgai_lite.exercises import check_pinhole
 
 def my_pinhole(theta, d, rcfg):
     ### BEGIN SOLUTION
+    # HINT: the four cameras each cover 90 degrees; find which camera sees theta, the angle phi from its axis, then u = camera offset + view_width/2 + focal * tan(phi)
     psi = (math.pi / 4 - theta) % (2 * math.pi)  # clockwise from the front camera's left edge
     cam = min(int(psi // (math.pi / 2)), 3)
     phi = psi - cam * math.pi / 2 - math.pi / 4  # angle to the right of camera cam's axis
@@ -267,3 +276,14 @@ check_pinhole(my_pinhole);
 # Notebook 05 builds the paper's visual state estimator: a CNN with residual blocks that pools only
 # along the vertical axis, so that the bearing of every drone in these panoramas survives to its
 # last layers.
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
+# the same checks: `python -m vgai_lite grade`, see the README).
+
+# %%
+from vgai_lite.exercises import score
+
+score("04");

@@ -11,6 +11,13 @@
 #
 # This notebook: the architecture and its cost; why vertical-only pooling; what the CNN can learn
 # from one frame and from two (visual state estimation); where it looks.
+#
+# **Learning objectives.** After this notebook you can explain the visual state estimator's
+# architecture and cost; say why it pools along the vertical axis only; show what one frame and two
+# frames can tell about neighbours.
+#
+# **You implement** a residual block with vertical-only pooling (exercise 05.1); an automatic check
+# tells you at once whether it is right, and the last cell gives your score.
 
 # %%
 import time
@@ -203,6 +210,7 @@ class MyResidualBlock(nn.Module):
     def __init__(self, c_in, c_out, pool):
         super().__init__()
         ### BEGIN SOLUTION
+        # HINT: nn.Conv2d(c_in, c_out, 3, padding=1) keeps H and W; nn.AvgPool2d((pool, 1)) averages rows only
         self.conv1 = nn.Conv2d(c_in, c_out, 3, padding=1)
         self.conv2 = nn.Conv2d(c_out, c_out, 3, padding=1)
         self.skip = nn.Conv2d(c_in, c_out, 1) if c_in != c_out else nn.Identity()
@@ -211,6 +219,7 @@ class MyResidualBlock(nn.Module):
 
     def forward(self, x):
         ### BEGIN SOLUTION
+        # HINT: conv, ReLU, conv, add the skip path, ReLU, then pool
         y = self.conv2(torch.relu(self.conv1(x)))
         return self.pool(torch.relu(y + self.skip(x)))
         ### END SOLUTION
@@ -223,3 +232,14 @@ check_residual_block(MyResidualBlock);
 #
 # Notebook 06 puts the CNN in front of the DAGNN's aggregation and trains both together, end to end,
 # by imitation of the expert with K-step backpropagation through time.
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
+# the same checks: `python -m vgai_lite grade`, see the README).
+
+# %%
+from vgai_lite.exercises import score
+
+score("05");

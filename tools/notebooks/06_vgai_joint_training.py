@@ -13,6 +13,13 @@
 # Pure vision: a VGAI drone never uses its own velocity or anyone's position; only its images and its
 # neighbours' messages. (A test checks that the controller's actions do not change when the
 # velocities passed to it do.)
+#
+# **Learning objectives.** After this notebook you can assemble VGAI from the renderer, the CNN and
+# the DAGNN's aggregation; explain K-step backpropagation through time and DAgger; compare VGAI with
+# the DAGNN, the local heuristic and the expert on the same episodes.
+#
+# **You implement** DAgger's mixing rule (exercise 06.1); an automatic check tells you at once whether
+# it is right, and the last cell gives your score.
 
 # %%
 import matplotlib.pyplot as plt
@@ -180,6 +187,7 @@ from vgai_lite.exercises import check_dagger_mix
 
 def my_dagger_mix(u_learner, u_expert, p, generator):
     ### BEGIN SOLUTION
+    # HINT: one torch.rand(B, generator=generator) < p per swarm, then torch.where with the coin broadcast to (B, N, 2)
     follow = torch.rand(u_learner.shape[0], generator=generator) < p
     return torch.where(follow[:, None, None], u_learner, u_expert)
     ### END SOLUTION
@@ -192,3 +200,14 @@ check_dagger_mix(my_dagger_mix);
 #
 # Notebook 07 regenerates the paper's tables (F, K, v_init, R, larger teams) with one command and sets
 # the paper's numbers beside ours.
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
+# the same checks: `python -m vgai_lite grade`, see the README).
+
+# %%
+from vgai_lite.exercises import score
+
+score("06");

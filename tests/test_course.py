@@ -1,0 +1,110 @@
+"""Course use (issue 7): solution stubs, student copies and the grader.
+
+The grader tests execute notebooks (quick mode): every solution notebook gets full marks, every
+untouched student copy executes to the end and gets zero.
+"""
+
+import json
+
+import nbformat
+import pytest
+
+from vgai_lite.book import ROOT
+from vgai_lite.course import grade_notebook, make_student_copies, strip_solutions, student_copy
+from vgai_lite.exercises import EXERCISES, check_dagger_mix, exercises_of, score
+
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+GRADED = [p for p in NOTEBOOKS if exercises_of(p.name[:2])]
+
+
+def test_every_notebook_01_to_06_has_a_graded_exercise():
+    assert sorted({k[:2] for k in EXERCISES}) == ["01", "02", "03", "04", "05", "06"]
+    assert [p.name[:2] for p in GRADED] == ["01", "02", "03", "04", "05", "06"]
+
+
+def test_strip_solutions_keeps_indent_and_hints():
+    src = ("def f(x):\n    ### BEGIN SOLUTION\n    # HINT: double it\n    y = 2 * x\n    return y\n"
+           "    ### END SOLUTION\n\nprint(f)")
+    out, n = strip_solutions(src, "01.1")
+    assert n == 1
+    assert "2 * x" not in out and "BEGIN" not in out
+    assert "    # HINT: double it" in out
+    assert '    raise NotImplementedError("exercise 01.1: replace this line with your code")' in out
+    ns = {}
+    exec(out, ns)
+    with pytest.raises(NotImplementedError):
+        ns["f"](1)
+
+
+@pytest.mark.parametrize("src", ["### BEGIN SOLUTION\nx = 1\n", "x = 1\n### END SOLUTION\n",
+                                 "### BEGIN SOLUTION\n### BEGIN SOLUTION\n### END SOLUTION\n"])
+def test_unbalanced_markers_are_reported(src):
+    with pytest.raises(ValueError, match="SOLUTION"):
+        strip_solutions(src)
+
+
+@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
+def test_student_copy_has_no_solution_and_no_output(path):
+    nb = nbformat.read(path, as_version=4)
+    solutions = [c.source for c in nb.cells if c.cell_type == "code" and "### BEGIN SOLUTION" in c.source]
+    copy, blocks = student_copy(nb, path.name)
+    assert blocks >= len(solutions) >= 1
+    text = "\n".join(c.source for c in copy.cells if c.cell_type == "code")
+    assert "### BEGIN SOLUTION" not in text and "NotImplementedError" in text
+    for sol in solutions:  # no line of any solution survives, except hints and signatures around it
+        inner = sol.split("### BEGIN SOLUTION")[1].split("### END SOLUTION")[0]
+        for line in inner.splitlines():
+            if line.strip() and not line.strip().startswith("# HINT:"):
+                assert line not in text.splitlines(), line
+    assert all(not c.get("outputs") for c in copy.cells if c.cell_type == "code")
+    nbformat.validate(copy)
+
+
+def test_score_counts_this_sessions_checks(capsys):
+    def wrong(u_l, u_e, p, g):
+        return u_e
+
+    assert not check_dagger_mix(wrong)
+    assert score("06") == {"score": 0, "max_score": 1, "exercises": {"06.1": False}}
+    assert "0/1" in capsys.readouterr().out
+    with pytest.raises(ValueError, match="two-digit"):
+        score("6")
+
+
+@pytest.fixture(scope="module")
+def student_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("student")
+    written = make_student_copies(out)
+    assert [p.name for p in written] == [p.name for p in NOTEBOOKS]
+    return out
+
+
+def test_student_copies_refuse_to_overwrite_the_book():
+    with pytest.raises(ValueError, match="overwrite"):
+        make_student_copies(ROOT / "notebooks")
+
+
+@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
+def test_grader_full_marks_for_solutions_zero_for_student_copies(path, student_dir, tmp_path):
+    solution = grade_notebook(path, out=tmp_path)
+    assert solution["score"] == solution["max_score"] == len(exercises_of(path.name[:2])), solution
+    assert solution["cell_errors"] == []
+    written = json.loads((tmp_path / (path.stem + ".json")).read_text())
+    assert written["score"] == solution["score"]
+
+    student = grade_notebook(student_dir / path.name)
+    assert student["cell_errors"] == [], "a student copy must execute to the end"
+    assert student["score"] == 0
+    for e in student["exercises"].values():
+        assert not e["passed"] and "not implemented" in e["message"]
+
+
+def test_grader_rejects_what_it_cannot_grade(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        grade_notebook(tmp_path / "01_missing.ipynb")
+    with pytest.raises(ValueError, match="no graded exercises"):
+        grade_notebook(NOTEBOOKS[0])  # 00, the overview
+    odd = tmp_path / "homework.ipynb"
+    nbformat.write(nbformat.v4.new_notebook(), odd)
+    with pytest.raises(ValueError, match="NN_"):
+        grade_notebook(odd)
