@@ -187,6 +187,26 @@ def cmd_grade(args, extra):
     return 1 if (failed and args.strict) else 0
 
 
+def cmd_reproduce(args, extra):
+    import torch
+
+    from .reproduce import TABLES, ReproduceConfig, format_table, run
+
+    torch.set_num_threads(args.threads)
+    rc = ReproduceConfig(quick=args.quick, seeds=args.seeds, vgai_seeds=args.vgai_seeds,
+                         episodes=args.episodes, episodes_large=args.episodes_large)
+    for t in args.only or []:
+        if t not in TABLES:
+            raise SystemExit(f"--only takes table names {list(TABLES)}, got {t!r}")
+    results = run(args.only, rc, out=args.out)
+    for table in results["tables"]:
+        print()
+        print(format_table(results, table))
+    p = results["provenance"]
+    print(f"\nwall time {p['wall_seconds']:.0f} s; ours (paper's); results in "
+          f"{args.out or ('data/results_quick' if args.quick else 'data/results')}/results.json and .csv")
+
+
 def cmd_benchmark(args, extra):
     from . import benchmark
 
@@ -227,6 +247,17 @@ def main(argv=None):
     p.add_argument("--retrain", action="store_true")
     p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
     p.add_argument("--threads", type=int, default=2)
+    p = sub.add_parser("reproduce", help="the paper's tables: train what is missing, evaluate, write data/results/")
+    p.add_argument("--only", nargs="+", metavar="TABLE", help="tables to run: F K v_init R N (default all)")
+    p.add_argument("--quick", action="store_true", help="every table in small form (tiny trainings, 2 short episodes)")
+    p.add_argument("--seeds", type=int, default=3, help="training seeds of the DAGNN rows (default 3)")
+    p.add_argument("--vgai-seeds", dest="vgai_seeds", type=int, default=1,
+                   help="training seeds of the VGAI rows (default 1; each is a half-hour training)")
+    p.add_argument("--episodes", type=int, default=30, help="held-out episodes per cell (N' <= 75)")
+    p.add_argument("--episodes-large", dest="episodes_large", type=int, default=10,
+                   help="held-out episodes per cell for N' >= 100")
+    p.add_argument("--out", default=None, help="results folder (default data/results, or data/results_quick)")
+    p.add_argument("--threads", type=int, default=2)
     p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
     p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
     p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")
@@ -243,6 +274,7 @@ def main(argv=None):
     return {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
      "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn,
      "train-vgai": cmd_train_vgai, "student-copies": cmd_student_copies,
+     "reproduce": cmd_reproduce,
      "grade": cmd_grade}[args.command](args, extra)
 
 

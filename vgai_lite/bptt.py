@@ -389,6 +389,23 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
     return cnn, vision, meta
 
 
+def load_or_train_vgai(path: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrainConfig, retrain: bool = False,
+                       progress: bool = True) -> tuple[VGAIController, bool]:
+    """Load the VGAI at ``path`` if it was trained, to the end, with exactly ``cfg`` and ``tcfg``;
+    otherwise train it (about half an hour at the defaults) and save it there. Returns
+    (controller, whether it was trained now)."""
+    from .checkpoints import load_controller, read_checkpoint
+
+    path = Path(path)
+    if path.is_file() and not retrain:
+        payload = read_checkpoint(path)
+        if (payload["config"] == dataclasses.asdict(cfg) and payload["meta"].get("train_config") == tcfg.to_dict()
+                and payload["meta"].get("finished")):
+            return load_controller(path), False
+    controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress)
+    return controller, True
+
+
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
     "vgai_F24": VGAITrainConfig(),   # the paper's default: F = 24, K - 1 = 3, egocentric, two frames
     "vgai_F6": VGAITrainConfig(F=6),     # Table 1a: as many features as the DAGNN's exact ones
@@ -406,22 +423,14 @@ def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bo
     when ``write_json`` (the command line's train-vgai does), so that a notebook run in quick mode
     never overwrites the shipped record. Returns (controller, RelativeCost)."""
     from .book import DATA_DIR, EVAL_SEED
-    from .checkpoints import load_controller, read_checkpoint
     from .imitation import write_evaluation
 
     if name not in VGAI_RUNS:
         raise ValueError(f"unknown run {name!r}; the book's VGAI runs are {sorted(VGAI_RUNS)}")
     cfg, tcfg = FlockConfig(), VGAI_RUNS[name]
     path = DATA_DIR / "vgai" / f"{name}.pt"
-    controller = None
-    if path.is_file() and not retrain:
-        payload = read_checkpoint(path)
-        if (payload["config"] == dataclasses.asdict(cfg) and payload["meta"].get("train_config") == tcfg.to_dict()
-                and payload["meta"].get("finished")):
-            controller = load_controller(path)
-    if controller is None:
-        controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress)
-        write_json = True
+    controller, trained = load_or_train_vgai(path, cfg, tcfg, retrain=retrain, progress=progress)
+    write_json = write_json or trained
     result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
     hist = controller.meta["history"]
     if write_json:

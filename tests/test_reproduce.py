@@ -1,0 +1,85 @@
+"""`python -m vgai_lite reproduce` (issue 6): plan, reuse of shipped models, a quick run of every table."""
+
+import csv
+import json
+
+import pytest
+
+from vgai_lite.bptt import VGAI_RUNS
+from vgai_lite.book import DATA_DIR
+from vgai_lite.config import FlockConfig
+from vgai_lite.reproduce import (PAPER, TABLES, ReproduceConfig, _shipped_path, flight_config, models_of, plan,
+                                 run)
+
+
+def test_paper_numbers_sit_in_existing_cells():
+    for table, rows in PAPER.items():
+        for row, cols in rows.items():
+            assert row in TABLES[table]["rows"]
+            assert set(cols) <= set(TABLES[table]["columns"])
+
+
+def test_every_column_flies_its_controllers_in_one_configuration():
+    rc = ReproduceConfig()
+    jobs = plan(rc, list(TABLES))
+    by_column = {}
+    for table, row, column, spec, flight, episodes in jobs:
+        by_column.setdefault((table, column), set()).add((json.dumps(flight.to_dict(), sort_keys=True), episodes))
+    assert all(len(v) == 1 for v in by_column.values())
+    assert flight_config(rc, "R", 2.0).R == 2.0 and flight_config(rc, "v_init", 1.0).v_init == 1.0
+    assert flight_config(rc, "N", 200).N == 200 and flight_config(rc, "N", 200).init_method == "repair"
+    # every model is trained on N = 50 (Table 3 transfers), and the default rows at the defaults
+    for table, row, column, spec, flight, episodes in jobs:
+        assert spec.cfg.N == 50
+        if row in ("DAGNN", "VGAI"):
+            assert spec.cfg == FlockConfig()
+
+
+def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
+    rc = ReproduceConfig()
+    (vgai,) = models_of(rc, "F", "VGAI", 24)
+    assert _shipped_path(vgai) == DATA_DIR / "vgai" / "vgai_F24.pt"
+    dagnn = models_of(rc, "K", "DAGNN", 2)
+    assert [_shipped_path(s) for s in dagnn] == [DATA_DIR / "dagnn" / "dagnn_K3.pt", None, None]
+    assert all(_shipped_path(s) is None for s in models_of(rc, "R", "DAGNN (retrained)", 1.0))
+    assert {_shipped_path(s).stem for s in (models_of(rc, "F", "VGAI", F)[0] for F in (6, 12))} <= set(VGAI_RUNS)
+    quick = ReproduceConfig(quick=True)
+    assert _shipped_path(models_of(quick, "F", "VGAI", 24)[0]) is None
+
+
+def test_bad_requests_are_refused(tmp_path):
+    with pytest.raises(ValueError, match="unknown table"):
+        run(["table9"], ReproduceConfig(quick=True), out=tmp_path, progress=False)
+    with pytest.raises(ValueError, match="positive integer"):
+        ReproduceConfig(seeds=0)
+
+
+def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
+    rc = ReproduceConfig(quick=True, seeds=2)
+    results = run(None, rc, out=tmp_path, progress=False)
+    assert list(results["tables"]) == list(TABLES)
+    prov = results["provenance"]
+    for key in ("git_commit", "packages", "wall_seconds", "reproduce_config", "compute_seconds"):
+        assert key in prov
+    assert prov["packages"]["torch"].startswith("2.13.0")
+    for table, t in results["tables"].items():
+        for column in t["columns"]:
+            cells = [t["rows"][row].get(str(column)) for row in t["rows"]]
+            cells = [c for c in cells if c is not None]
+            assert cells
+            # one set of held-out episodes per column: the expert's figures agree in every row
+            assert len({c["expert_min_distance"] for c in cells}) == 1
+            for c in cells:
+                assert c["relative_cost_mean"] > 0 and c["min_distance"] > 0
+        for row in t["rows"]:
+            if row.startswith("DAGNN") and t["rows"][row]:
+                assert all(len(c["per_seed"]) == 2 and c["seed_std"] is not None for c in t["rows"][row].values())
+    with open(tmp_path / "results.csv") as f:
+        assert len(list(csv.DictReader(f))) == sum(len(r) for t in results["tables"].values()
+                                                   for r in t["rows"].values())
+    cells = sorted((tmp_path / "cells").glob("*.json"))
+    stamps = {p: p.stat().st_mtime_ns for p in cells}
+    again = run(["K", "N"], rc, out=tmp_path, progress=False)  # nothing new to compute
+    assert sorted((tmp_path / "cells").glob("*.json")) == cells
+    assert all(p.stat().st_mtime_ns == stamps[p] for p in cells)
+    assert again["tables"]["K"] == results["tables"]["K"]

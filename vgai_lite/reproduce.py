@@ -1,0 +1,423 @@
+"""Reproduce the paper's section 4 tables with one command: ``python -m vgai_lite reproduce``.
+
+Introduced in notebook 07. Five tables (relative cost, the centralized expert = 1.00):
+
+  F       Table 1a  features per agent F = 6, 12, 24 (VGAI; the DAGNN's 6 exact features at F = 6)
+  K       Table 1b  exchanges K - 1 = 1, 2, 3 (DAGNN and VGAI, each trained at that K)
+  v_init  Table 2a  initial velocity 1, 2, 3 m/s (DAGNN, Local, VGAI)
+  R       Table 2b  communication radius 1.0, 1.5, 2.0 m (DAGNN, Local, VGAI)
+  N       Table 3   trained on N = 50, flown by N' = 50, 60, 75 agents (paper) and 100, 200 (ours)
+
+The paper does not say whether the v_init and R tables retrain the controllers (its section is
+about "robustness to different initial conditions"). Our choice: the rows DAGNN and VGAI are the
+controllers trained at the defaults (v_init = 3, R = 1.5), flown in each condition; the row
+"DAGNN (retrained)" is a DAGNN trained in that condition, which is cheap, to show what retraining buys.
+
+Every cell of a column is evaluated on the same held-out initial conditions (seed
+``book.EVAL_SEED``), so controllers are compared episode by episode. A cell is one
+(controller, flight configuration, episodes, seed); its result is written to
+``OUT/cells/KEY.json`` (KEY a hash of everything that defines it) before the next starts, so an
+interrupted run resumes where it stopped and a cell shared by several tables (the default VGAI
+appears in all five) is computed once. Trained models are reused: the book's shipped checkpoints
+(data/dagnn/, data/vgai/) when the configuration is the same, otherwise ``OUT/models/``.
+``OUT/results.json`` and ``OUT/results.csv`` gather the tables with the provenance of the run.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import hashlib
+import json
+import platform
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional, Union
+
+import torch
+from tqdm.auto import tqdm
+
+from .book import DATA_DIR, EVAL_SEED, ROOT
+from .bptt import VGAI_RUNS, VGAITrainConfig, load_or_train_vgai
+from .config import FlockConfig
+from .imitation import BOOK_RUNS, DAGNNTrainConfig, load_or_train
+
+PAPER: dict[str, dict] = {
+    "F": {"DAGNN": {6: 1.70}, "VGAI": {6: 2.37, 12: 2.38, 24: 2.26}},
+    "K": {"DAGNN": {1: 1.94, 2: 1.82, 3: 1.70}, "VGAI": {1: 2.48, 2: 2.29, 3: 2.26}},
+    "v_init": {"DAGNN": {1: 1.58, 2: 1.63, 3: 1.70}, "Local": {1: 3.63, 2: 3.77, 3: 4.13},
+               "VGAI": {1: 1.97, 2: 2.10, 3: 2.26}},
+    "R": {"DAGNN": {1.0: 1.95, 1.5: 1.70, 2.0: 1.59}, "Local": {1.0: 4.85, 1.5: 4.13, 2.0: 2.75},
+          "VGAI": {1.0: 2.65, 1.5: 2.26, 2.0: 1.77}},
+    "N": {"VGAI": {50: 1.70, 60: 2.14, 75: 2.23}},
+}
+"""The paper's numbers (Tables 1-3), by table, row and column. Typed from the paper's source
+(../shared/paper/vgai-corl2020.tex, section 4); they are the only hand-typed numbers of the book."""
+
+TABLES: dict[str, dict] = {
+    "F": {"title": "Table 1a: feature dimension F (K - 1 = 3)", "column": "F", "columns": [6, 12, 24],
+          "rows": ["DAGNN", "VGAI"]},
+    "K": {"title": "Table 1b: number of exchanges K - 1 (F = 24)", "column": "K - 1", "columns": [1, 2, 3],
+          "rows": ["DAGNN", "VGAI"]},
+    "v_init": {"title": "Table 2a: initial velocity v_init [m/s]", "column": "v_init", "columns": [1.0, 2.0, 3.0],
+               "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"]},
+    "R": {"title": "Table 2b: communication radius R [m]", "column": "R", "columns": [1.0, 1.5, 2.0],
+          "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"]},
+    "N": {"title": "Table 3: trained on N = 50, flown by N' agents", "column": "N'",
+          "columns": [50, 60, 75, 100, 200], "rows": ["DAGNN", "Local", "VGAI"]},
+}
+
+
+@dataclass(frozen=True)
+class ReproduceConfig:
+    """What a reproduction run does; the defaults are the committed full run.
+
+    Attributes:
+        episodes: held-out episodes per cell (N' <= 75); ``episodes_large`` for N' >= 100, where a
+            VGAI episode renders N'^2 drone views per step.
+        seed: seed of the held-out initial conditions (the book's EVAL_SEED).
+        seeds: training seeds 0..seeds-1 of the DAGNN rows (spread over training seeds);
+        vgai_seeds: the same for VGAI (each costs a VGAI training of about half an hour).
+        quick: tiny trainings and short episodes, every table in small form (the tests).
+        repair_from: N' from which initial conditions use the "repair" sampler (whole-swarm rejection
+            accepts about 1 draw in 400,000 at N' = 75).
+    """
+
+    episodes: int = 30
+    episodes_large: int = 10
+    seed: int = EVAL_SEED
+    seeds: int = 3
+    vgai_seeds: int = 1
+    quick: bool = False
+    repair_from: int = 75
+
+    def __post_init__(self):
+        for name in ("episodes", "episodes_large", "seeds", "vgai_seeds"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+
+
+QUICK_T = 30
+"""Steps per episode in quick mode (full: FlockConfig.T = 200)."""
+
+
+def _quick_dagnn(t: DAGNNTrainConfig) -> DAGNNTrainConfig:
+    return dataclasses.replace(t, rounds=2, episodes_per_round=2, epochs_per_round=1)
+
+
+def _quick_vgai(t: VGAITrainConfig) -> VGAITrainConfig:
+    return dataclasses.replace(t, expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=4,
+                               warm_states=1, mlp_epochs=1, joint_steps=2, windows=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# Models
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """A trained controller: kind ("dagnn", "vgai" or "local"), training configuration and name."""
+
+    kind: str
+    cfg: FlockConfig
+    tcfg: Optional[object] = None
+    name: str = ""
+
+    def identity(self) -> dict:
+        return {"kind": self.kind, "config": self.cfg.to_dict(),
+                "train_config": self.tcfg.to_dict() if self.tcfg is not None else None}
+
+    def key(self) -> str:
+        return _hash(self.identity())
+
+
+def _hash(obj) -> str:
+    return hashlib.sha1(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
+def _base_cfg(rc: ReproduceConfig, **changes) -> FlockConfig:
+    cfg = FlockConfig(**changes)
+    return cfg.replace(T=QUICK_T) if rc.quick else cfg
+
+
+def _dagnn(rc, K=4, seed=0, **cfg_changes) -> ModelSpec:
+    t = dataclasses.replace(DAGNNTrainConfig(K=K), seed=seed)
+    return ModelSpec("dagnn", _base_cfg(rc, **cfg_changes), _quick_dagnn(t) if rc.quick else t,
+                     f"dagnn_K{K}" + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}")
+
+
+def _vgai(rc, F=24, K=4, seed=0) -> ModelSpec:
+    t = VGAITrainConfig(F=F, K=K, seed=seed)
+    return ModelSpec("vgai", _base_cfg(rc), _quick_vgai(t) if rc.quick else t, f"vgai_F{F}_K{K}_s{seed}")
+
+
+def models_of(rc: ReproduceConfig, table: str, row: str, column) -> list[ModelSpec]:
+    """The controllers (one per training seed) behind a cell of a table."""
+    if row == "Local":
+        return [ModelSpec("local", _base_cfg(rc), None, "local")]
+    dagnn_seeds, vgai_seeds = range(rc.seeds), range(rc.vgai_seeds)
+    if row == "DAGNN (retrained)":
+        key = {"v_init": "v_init", "R": "R"}[table]
+        return [_dagnn(rc, seed=s, **{key: float(column)}) for s in dagnn_seeds]
+    if row == "DAGNN":
+        K = int(column) + 1 if table == "K" else 4
+        return [_dagnn(rc, K=K, seed=s) for s in dagnn_seeds]
+    if row == "VGAI":
+        F = int(column) if table == "F" else 24
+        K = int(column) + 1 if table == "K" else 4
+        return [_vgai(rc, F=F, K=K, seed=s) for s in vgai_seeds]
+    raise ValueError(f"unknown row {row!r}")
+
+
+def flight_config(rc: ReproduceConfig, table: str, column) -> FlockConfig:
+    """The configuration a column's episodes are flown in."""
+    if table in ("F", "K"):
+        return _base_cfg(rc)
+    if table == "v_init":
+        return _base_cfg(rc, v_init=float(column))
+    if table == "R":
+        return _base_cfg(rc, R=float(column))
+    if table == "N":
+        n = int(column)
+        return _base_cfg(rc, N=n, init_method="repair" if n >= rc.repair_from else "reject")
+    raise ValueError(f"unknown table {table!r}; the tables are {sorted(TABLES)}")
+
+
+def episodes_of(rc: ReproduceConfig, cfg: FlockConfig) -> int:
+    n = rc.episodes_large if cfg.N >= 100 else rc.episodes
+    return min(n, 2) if rc.quick else n
+
+
+def _shipped_path(spec: ModelSpec) -> Optional[Path]:
+    """The book's checkpoint for ``spec`` when it ships one with exactly this configuration."""
+    if spec.cfg != FlockConfig():
+        return None
+    runs, folder = (BOOK_RUNS, "dagnn") if spec.kind == "dagnn" else (VGAI_RUNS, "vgai")
+    for name, t in runs.items():
+        if t == spec.tcfg:
+            return DATA_DIR / folder / f"{name}.pt"
+    return None
+
+
+def model_path(spec: ModelSpec, out: Path) -> Path:
+    return _shipped_path(spec) or out / "models" / f"{spec.name}_{spec.key()}.pt"
+
+
+def obtain(spec: ModelSpec, out: Path, progress: bool = False):
+    """The trained controller of ``spec``: loaded if a finished checkpoint of the same
+    configuration exists, else trained now and saved. Returns (controller, seconds trained now)."""
+    from .controllers import LocalController
+
+    if spec.kind == "local":
+        return LocalController(spec.cfg), 0.0
+    path = model_path(spec, out)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    if spec.kind == "dagnn":
+        controller = load_or_train(path, spec.cfg, spec.tcfg, progress=progress)
+    else:
+        controller, _ = load_or_train_vgai(path, spec.cfg, spec.tcfg, progress=progress)
+    controller.checkpoint = path
+    return controller, time.perf_counter() - start
+
+
+# ---------------------------------------------------------------------------------------------
+# Cells
+
+
+def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int, out: Path,
+                  progress: bool = False) -> dict:
+    """Fly the controller of ``spec`` in ``flight`` (episodes from ``seed``) and record its figures;
+    read from OUT/cells/ if this exact cell was computed before."""
+    from .checkpoints import load_controller
+    from .evaluate import relative_cost
+
+    ident = {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
+    key = _hash(ident)
+    path = out / "cells" / f"{key}.json"
+    if path.is_file():
+        return json.loads(path.read_text())
+    controller, train_seconds = obtain(spec, out, progress)
+    ckpt = getattr(controller, "checkpoint", None)
+    if spec.kind != "local":
+        controller = load_controller(ckpt, cfg=flight)  # fly it in this configuration
+    else:
+        controller = type(controller)(flight)
+    start = time.perf_counter()
+    res = relative_cost(controller, flight, episodes=episodes, seed=seed, name=spec.name)
+    record = {"key": key, **ident, "name": spec.name, **res.summary(),
+              "min_distance": round(float(res.safety.min_distance.min()), 4),
+              "expert_min_distance": round(float(res.expert_safety.min_distance.min()), 4),
+              "eval_seconds": round(time.perf_counter() - start, 1),
+              "train_seconds_now": round(train_seconds, 1),
+              "checkpoint": (str(Path(ckpt).resolve().relative_to(ROOT.resolve()))
+                             if ckpt is not None and _inside(ckpt, ROOT) else (str(ckpt) if ckpt else None))}
+    if spec.kind != "local":
+        record["train_seconds_recorded"] = round(controller.meta.get("history", {}).get("seconds", 0.0), 1)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=1) + "\n")
+    return record
+
+
+def _inside(path, root) -> bool:
+    try:
+        Path(path).resolve().relative_to(Path(root).resolve())
+        return True
+    except ValueError:
+        return False
+
+
+def plan(rc: ReproduceConfig, tables: list[str]) -> list[tuple]:
+    """Every (table, row, column, spec, flight, episodes) of the run, in order."""
+    jobs = []
+    for table in tables:
+        t = TABLES[table]
+        for column in t["columns"]:
+            flight = flight_config(rc, table, column)
+            for row in t["rows"]:
+                if table == "F" and row == "DAGNN" and column != 6:
+                    continue  # the DAGNN's features are its 6 exact ones
+                for spec in models_of(rc, table, row, column):
+                    jobs.append((table, row, column, spec, flight, episodes_of(rc, flight)))
+    return jobs
+
+
+def _cost_estimate(spec: ModelSpec, flight: FlockConfig, episodes: int) -> float:
+    """Rough relative cost of a cell in seconds, for the progress display's time left."""
+    w = {"local": 0.002, "dagnn": 0.004, "vgai": 0.04}[spec.kind] * episodes * flight.T / 200
+    return w * (flight.N / 50) ** (2 if spec.kind == "vgai" else 1) * 50
+
+
+# ---------------------------------------------------------------------------------------------
+# The run
+
+
+def provenance(rc: ReproduceConfig, seconds: float, started: str) -> dict:
+    import importlib.metadata as md
+
+    def version(p):
+        try:
+            return md.version(p)
+        except md.PackageNotFoundError:
+            return None
+
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                                check=True).stdout.strip()
+        dirty = bool(subprocess.run(["git", "status", "--porcelain", "--", "vgai_lite"], cwd=ROOT,
+                                    capture_output=True, text=True).stdout.strip())
+    except (OSError, subprocess.CalledProcessError):
+        commit, dirty = None, None
+    return {"reproduce_config": dataclasses.asdict(rc), "started": started, "wall_seconds": round(seconds, 1),
+            "git_commit": commit, "library_modified_since_commit": dirty,
+            "python": platform.python_version(), "platform": platform.platform(),
+            "torch_threads": torch.get_num_threads(),
+            "packages": {p: version(p) for p in ("torch", "numpy", "pymunk", "matplotlib", "vgai-lite")},
+            "command": " ".join(["python -m vgai_lite"] + sys.argv[1:]) if sys.argv else None}
+
+
+def _aggregate(records: list[dict]) -> dict:
+    means = [r["relative_cost_mean"] for r in records]
+    first = records[0]
+    out = {"relative_cost_mean": round(sum(means) / len(means), 4), "per_seed": means,
+           "seed_std": round(float(torch.tensor(means).std()), 4) if len(means) > 1 else None,
+           "ci95": first["relative_cost_mean_ci95"] if len(records) == 1 else None,
+           "median": first["relative_cost_median"], "quartiles": first["relative_cost_quartiles"],
+           "episodes": first["episodes"], "min_distance": min(r["min_distance"] for r in records),
+           "median_min_distance": first["median_min_distance"],
+           "share_below_0.05m": first["share_below_0.05m"],
+           "expert_min_distance": first["expert_min_distance"],
+           "expert_median_min_distance": first["expert_median_min_distance"],
+           "expert_share_below_0.05m": first["expert_share_below_0.05m"],
+           "cells": [r["key"] for r in records]}
+    return out
+
+
+def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfig(),
+        out: Optional[Union[str, Path]] = None, progress: bool = True) -> dict:
+    """Compute (or read back) every cell of ``tables`` and write OUT/results.json and .csv."""
+    tables = list(tables or TABLES)
+    unknown = [t for t in tables if t not in TABLES]
+    if unknown:
+        raise ValueError(f"unknown table(s) {unknown}; the tables are {list(TABLES)}")
+    out = Path(out) if out is not None else DATA_DIR / ("results_quick" if rc.quick else "results")
+    out.mkdir(parents=True, exist_ok=True)
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    start = time.perf_counter()
+    jobs = plan(rc, tables)
+    total = sum(_cost_estimate(s, f, e) for _, _, _, s, f, e in jobs)
+    records: dict[tuple, list] = {}
+    bar = tqdm(total=total, desc="reproduce", unit="est-s", disable=not progress,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}] {postfix}")
+    for i, (table, row, column, spec, flight, episodes) in enumerate(jobs):
+        bar.set_postfix_str(f"cell {i + 1}/{len(jobs)}: table {table}, {row}, {TABLES[table]['column']} = {column:g}")
+        rec = evaluate_cell(spec, flight, episodes, rc.seed, out, progress=False)
+        records.setdefault((table, row, column), []).append(rec)
+        bar.update(_cost_estimate(spec, flight, episodes))
+    bar.close()
+    seconds = time.perf_counter() - start
+    results = {"provenance": provenance(rc, seconds, started), "tables": {}}
+    every = {r["key"]: r for recs in records.values() for r in recs}.values()
+    trained = {r["checkpoint"]: r.get("train_seconds_recorded", 0.0) for r in every if r.get("checkpoint")}
+    results["provenance"]["compute_seconds"] = {
+        "evaluation": round(sum(r["eval_seconds"] for r in every), 1),
+        "training_recorded": round(sum(trained.values()), 1),
+        "note": "seconds each cell's evaluation took when it was computed, and the training time recorded in "
+                "each checkpoint used (shipped or trained by this command), however many runs it took"}
+    rows_csv = []
+    for table in tables:
+        t = TABLES[table]
+        entry = {"title": t["title"], "column": t["column"], "columns": t["columns"], "rows": {}}
+        for row in t["rows"]:
+            cells = {}
+            for column in t["columns"]:
+                if (table, row, column) not in records:
+                    continue
+                agg = _aggregate(records[(table, row, column)])
+                agg["paper"] = PAPER.get(table, {}).get(row, {}).get(column)
+                cells[str(column)] = agg
+                rows_csv.append({"table": table, "row": row, "column": t["column"], "value": column,
+                                 "relative_cost_mean": agg["relative_cost_mean"],
+                                 "ci95_low": (agg["ci95"] or [None, None])[0],
+                                 "ci95_high": (agg["ci95"] or [None, None])[1],
+                                 "seed_std": agg["seed_std"], "seeds": len(agg["per_seed"]),
+                                 "episodes": agg["episodes"], "min_distance": agg["min_distance"],
+                                 "share_below_0.05m": agg["share_below_0.05m"], "paper": agg["paper"]})
+            entry["rows"][row] = cells
+        results["tables"][table] = entry
+    (out / "results.json").write_text(json.dumps(results, indent=1) + "\n")
+    with open(out / "results.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows_csv[0]))
+        w.writeheader()
+        w.writerows(rows_csv)
+    return results
+
+
+def load_results(out: Optional[Union[str, Path]] = None) -> dict:
+    """The results of the last run written to ``out`` (default data/results/)."""
+    path = Path(out or DATA_DIR / "results") / "results.json"
+    if not path.is_file():
+        raise FileNotFoundError(f"no results at {path}: run `python -m vgai_lite reproduce` first")
+    return json.loads(path.read_text())
+
+
+def format_table(results: dict, table: str) -> str:
+    """One table as text: ours (paper's) per row and column."""
+    t = results["tables"][table]
+    head = f"{t['column']:>18s} " + " ".join(f"{c:>14g}" for c in t["columns"])
+    lines = [t["title"], head]
+    for row, cells in t["rows"].items():
+        parts = []
+        for c in t["columns"]:
+            cell = cells.get(str(c))
+            if cell is None:
+                parts.append(f"{'':>14s}")
+                continue
+            paper = f"({cell['paper']:.2f})" if cell["paper"] is not None else "(-)"
+            parts.append(f"{cell['relative_cost_mean']:>7.2f} {paper:>6s}")
+        lines.append(f"{row:>18s} " + " ".join(parts))
+    return "\n".join(lines)
