@@ -34,7 +34,8 @@
 # | **06** VGAI | CNN and DAGNN trained jointly, K-step backpropagation through time | §3.4, Fig. 3 |
 # | **07** experiments | the paper's tables regenerated, the paper's numbers beside ours | §4 |
 #
-# Notebooks 00-06 are written; 07 (the paper's tables regenerated with one command) is being written.
+# Notebook 07's tables come from one command, `python -m vgai_lite reproduce` (its results ship in
+# `data/results/`).
 #
 # ## How to use the book
 #
@@ -44,7 +45,9 @@
 #   docstring carries the equation and the shapes of every tensor, with the paper's symbols
 #   ($\mathbf S$, $\mathbf X$, $\mathbf Z$, $K$, $F$, $R$, $\rho$).
 # * **Exercises** end each notebook: you write a real piece of the method and an automatic check
-#   tells you whether it is right, and if not, on which input it went wrong.
+#   tells you whether it is right, and if not, on which input it went wrong; the last cell gives
+#   your score. Instructors: `python -m vgai_lite student-copies` writes copies without the
+#   solutions and `python -m vgai_lite grade` scores a student's notebook (see the README).
 # * **Quick mode.** Setting the environment variable `VGAI_LITE_QUICK=1` shrinks every loop (fewer
 #   episodes, steps and epochs) so a notebook runs in seconds; the test suite runs the book this
 #   way. The library reads the variable in one place, `vgai_lite/book.py`:
