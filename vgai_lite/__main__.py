@@ -208,9 +208,13 @@ def cmd_reproduce(args, extra):
 
 
 def cmd_benchmark(args, extra):
+    import torch
+
     from . import benchmark
 
-    benchmark.main()
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    benchmark.main(args)
 
 
 def main(argv=None):
@@ -234,7 +238,9 @@ def main(argv=None):
     p = sub.add_parser("export", help="headless: write the notebooks as HTML pages")
     p.add_argument("--out", default="out/html")
     p.add_argument("--execute", action="store_true", help="run each notebook first (full mode: minutes)")
-    sub.add_parser("benchmark", help="agent-steps per second of step + expert_control")
+    p = sub.add_parser("benchmark", help="agent-steps per second of step + expert_control")
+    p.add_argument("--vgai", action="store_true", help="instead: VGAI training steps per second, projected training time")
+    p.add_argument("--threads", type=int, default=None, help="torch threads (default torch's)")
     p = sub.add_parser("train-dagnn", help="train (or load) the book's DAGNNs, evaluate, write data/dagnn/")
     p.add_argument("names", nargs="*", help="runs to train, e.g. dagnn_K4")
     p.add_argument("--all", action="store_true", help="every run the book ships")

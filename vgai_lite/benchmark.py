@@ -101,7 +101,57 @@ def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=N
     return rows
 
 
+def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
+    """Seconds per gradient step of VGAI's stage 1 (visual state estimation) and stage 3 (joint
+    K-step BPTT), and per evaluation episode, at the default VGAITrainConfig; projects the time of
+    a full default training from them (flight collection and validation included)."""
+    from .bptt import VGAITrainConfig, collect_episodes, fit_state_estimator, window_loss
+    from .evaluate import relative_cost
+    from .models import AggregationMLP, VGAIController, VGAIModel, VisualCNN
+
+    cfg, tcfg = FlockConfig(), VGAITrainConfig()
+    gen = torch.Generator().manual_seed(0)
+    r0, v0 = sample_initial_state(cfg, episodes, gen)
+    start = time.perf_counter()
+    r, v, u = collect_episodes(None, cfg, r0, v0, 0.0, gen)
+    collect_expert = (time.perf_counter() - start) / episodes
+    C, H, W = tcfg.vision.image_shape(cfg)
+    model = VGAIModel(VisualCNN(C, H, W, tcfg.F, tcfg.cnn_widths, tcfg.cnn_hidden),
+                      AggregationMLP(tcfg.K, tcfg.F, tcfg.hidden))
+    start = time.perf_counter()
+    fit_state_estimator(model.cnn, tcfg.vision, cfg, r, v, steps, tcfg.warm_states, tcfg, gen, progress=False)
+    stage1 = (time.perf_counter() - start) / steps
+    opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
+    model.train()
+    start = time.perf_counter()
+    for _ in range(steps):
+        loss = window_loss(model, tcfg.vision, cfg, tcfg, r, v, u, gen)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+    stage3 = (time.perf_counter() - start) / steps
+    model.eval()
+    learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
+    start = time.perf_counter()
+    relative_cost(learner, cfg, episodes=episodes, seed=0)
+    episode = (time.perf_counter() - start) / episodes  # the learner and the expert flying one episode
+    flights = tcfg.expert_episodes * collect_expert + tcfg.dagger_rounds * tcfg.episodes_per_round * episode
+    validation = (tcfg.dagger_rounds + 1) * 10 * episode
+    projected = tcfg.warm_steps * stage1 + tcfg.dagger_rounds * tcfg.joint_steps * stage3 + flights + validation
+    return {"stage1_step_s": stage1, "joint_step_s": stage3, "eval_episode_s": episode,
+            "expert_episode_s": collect_expert, "projected_training_s": projected}
+
+
 def main(args=None) -> None:
+    if args is not None and getattr(args, "vgai", False):
+        out = run_vgai_training()
+        print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, default VGAITrainConfig")
+        print(f"stage 1 step (8 swarm states x 50 images): {out['stage1_step_s']:.3f} s")
+        print(f"joint BPTT step (4 windows x 4 steps x 50 images): {out['joint_step_s']:.3f} s")
+        print(f"one evaluation episode (VGAI + expert, 200 steps, N = 50): {out['eval_episode_s']:.2f} s")
+        print(f"projected default training (3,000 + 4 x 600 steps, flights, validation): "
+              f"{out['projected_training_s'] / 60:.1f} min")
+        return
     rows = run()
     print(f"torch {torch.__version__}, {torch.get_num_threads()} threads")
     print(f"{'implementation':32s} {'batch':>6s} {'N':>4s} {'agent-steps/s':>15s} {'vs baseline':>12s}")

@@ -202,6 +202,28 @@ def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, ep
     return out
 
 
+def window_loss(model: VGAIModel, vision: VisionConfig, cfg: FlockConfig, tcfg: VGAITrainConfig,
+                r: torch.Tensor, v: torch.Tensor, u: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+    """The L1 loss of one joint step: ``tcfg.windows`` windows of K steps drawn from stored flights
+    r, v, u* (T, E, N, 2). Every agent's K images of a window go through the CNN, the features
+    through the unrolled aggregation (eq. 6), the MLP acts once at the window's last step; calling
+    ``backward`` on the result is K-step BPTT."""
+    T, E = r.shape[:2]
+    K = tcfg.K
+    e = torch.randint(0, E, (tcfg.windows,), generator=gen)
+    t_end = _sample_times(tcfg.windows, T, tcfg, gen)
+    tau = t_end[:, None] - (K - 1) + torch.arange(K)  # (windows, K) times of the window
+    valid = (tau >= 0).float()
+    tau_c = tau.clamp(min=0)
+    ee = e[:, None].expand_as(tau)
+    img = _images(vision, cfg, r, v, ee.flatten(), tau_c.flatten())  # (windows K, N, C, H, W)
+    Xw = model.cnn(img.flatten(0, 1)).view(tcfg.windows, K, cfg.N, tcfg.F) * valid[:, :, None, None]
+    Sw = gso(adjacency(r[tau_c.flatten(), ee.flatten()], cfg.R), tcfg.gso).view(tcfg.windows, K, cfg.N, cfg.N)
+    Sw = Sw * valid[:, :, None, None]
+    Zw = aggregation_sequence(Xw, Sw, K)[:, -1]  # Z at the window's last step, (windows, N, K, F)
+    return nnf.l1_loss(model.mlp(Zw), u[t_end, e])
+
+
 def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
                checkpoint: Optional[Union[str, Path]] = None, progress: bool = True,
                validation_episodes: int = 10) -> tuple[VGAIController, dict]:
@@ -277,7 +299,6 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
 
     # Stage 3: joint K-step BPTT, with DAgger rounds.
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
-    K = tcfg.K
     for rnd in range(tcfg.dagger_rounds):
         model.eval()
         r0, v0 = sample_initial_state(cfg, tcfg.episodes_per_round, gen)
@@ -288,18 +309,7 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
         bar = tqdm(range(tcfg.joint_steps), desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}",
                    disable=not progress)
         for _ in bar:
-            e = torch.randint(0, E, (tcfg.windows,), generator=gen)
-            t_end = _sample_times(tcfg.windows, T, tcfg, gen)
-            tau = t_end[:, None] - (K - 1) + torch.arange(K)  # (windows, K) times of the window
-            valid = (tau >= 0).float()
-            tau_c = tau.clamp(min=0)
-            ee = e[:, None].expand_as(tau)
-            img = _images(vision, cfg, r, v, ee.flatten(), tau_c.flatten())  # (windows K, N, C, H, W)
-            Xw = cnn(img.flatten(0, 1)).view(tcfg.windows, K, cfg.N, tcfg.F) * valid[:, :, None, None]
-            Sw = gso(adjacency(r[tau_c.flatten(), ee.flatten()], cfg.R), tcfg.gso).view(tcfg.windows, K, cfg.N, cfg.N)
-            Sw = Sw * valid[:, :, None, None]
-            Zw = aggregation_sequence(Xw, Sw, K)[:, -1]  # Z at the window's last step, (windows, N, K, F)
-            loss = nnf.l1_loss(model.mlp(Zw), u[t_end, e])
+            loss = window_loss(model, vision, cfg, tcfg, r, v, u, gen)
             opt.zero_grad(set_to_none=True)
             loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
             opt.step()
