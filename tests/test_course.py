@@ -10,7 +10,7 @@ import nbformat
 import pytest
 
 from vgai_lite.book import ROOT
-from vgai_lite.course import grade_notebook, make_student_copies, strip_solutions, student_copy
+from vgai_lite.course import grade_notebook, make_student_copies, report_name, strip_solutions, student_copy
 from vgai_lite.exercises import EXERCISES, check_dagger_mix, exercises_of, score
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
@@ -89,7 +89,8 @@ def test_grader_full_marks_for_solutions_zero_for_student_copies(path, student_d
     solution = grade_notebook(path, out=tmp_path)
     assert solution["score"] == solution["max_score"] == len(exercises_of(path.name[:2])), solution
     assert solution["cell_errors"] == []
-    written = json.loads((tmp_path / (path.stem + ".json")).read_text())
+    written = json.loads((tmp_path / report_name(path)).read_text())
+    assert report_name(path) == f"notebooks__{path.stem}.json"
     assert written["score"] == solution["score"]
 
     student = grade_notebook(student_dir / path.name)

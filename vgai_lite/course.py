@@ -129,6 +129,13 @@ def make_student_copies(out: Union[str, Path], source: Optional[Union[str, Path]
     return written
 
 
+def report_name(path: Union[str, Path]) -> str:
+    """File name of a notebook's grade report in a folder: FOLDER__NAME.json, so that the same
+    notebook handed in by several students (one folder each) gets one report each."""
+    path = Path(path).resolve()
+    return f"{path.parent.name}__{path.stem}.json"
+
+
 def grade_notebook(path: Union[str, Path], out: Optional[Union[str, Path]] = None, notebook: Optional[str] = None,
                    quick: bool = True, timeout: int = 600) -> dict:
     """Execute a (student's) notebook, collect its exercise checks, return a score per exercise.
@@ -136,7 +143,7 @@ def grade_notebook(path: Union[str, Path], out: Optional[Union[str, Path]] = Non
     Every cell runs even if one raises (errors are listed in the report). An exercise scores 1 when
     its check's last run in the notebook passed, 0 when it failed or never ran. ``quick`` runs the
     book in quick mode (``VGAI_LITE_QUICK=1``). Writes the report to ``out`` (a .json file, or a
-    folder that gets NAME.json) when given.
+    folder that gets FOLDER__NAME.json, see ``report_name``) when given.
     """
     from nbclient import NotebookClient
 
@@ -181,7 +188,7 @@ def grade_notebook(path: Union[str, Path], out: Optional[Union[str, Path]] = Non
               "seconds": round(time.perf_counter() - start, 1)}
     if out is not None:
         out = Path(out)
-        target = out if out.suffix == ".json" else out / (path.stem + ".json")
+        target = out if out.suffix == ".json" else out / report_name(path)
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_text(json.dumps(report, indent=2) + "\n")
         report["written_to"] = str(target)
