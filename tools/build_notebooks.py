@@ -8,6 +8,7 @@ that the committed notebook shows its outputs:
     python tools/build_notebooks.py                 # every notebook
     python tools/build_notebooks.py 01              # the notebooks whose name starts with 01
     python tools/build_notebooks.py --no-execute    # structure only, no outputs
+    python tools/build_notebooks.py 06 --markdown-only   # prose edits only: keep the executed outputs
 
 Edit the source, not the .ipynb, then rebuild: the two stay in step.
 """
@@ -73,10 +74,27 @@ def build(source: Path, execute: bool) -> Path:
     return target
 
 
+def update_markdown(source: Path) -> Path:
+    """Copy the markdown cells of ``source`` into the executed notebook, keeping its outputs; refuses
+    when any code cell differs (then the notebook must be executed again)."""
+    new = parse(source.read_text())
+    target = TARGET / (source.stem + ".ipynb")
+    old = nbformat.read(target, as_version=4)
+    kinds = lambda nb: [(c.cell_type, c.source if c.cell_type == "code" else None) for c in nb.cells]
+    if kinds(new) != kinds(old):
+        raise SystemExit(f"{source.name}: code cells changed (or cells added/removed); rebuild without --markdown-only")
+    for a, b in zip(old.cells, new.cells):
+        if a.cell_type == "markdown":
+            a.source = b.source
+    nbformat.write(old, target)
+    return target
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("prefixes", nargs="*", help="build only notebooks whose name starts with one of these")
     p.add_argument("--no-execute", action="store_true")
+    p.add_argument("--markdown-only", action="store_true", help="update prose only, keep outputs")
     args = p.parse_args(argv)
     sources = sorted(SOURCES.glob("[0-9][0-9]_*.py"))
     if args.prefixes:
@@ -85,7 +103,8 @@ def main(argv=None) -> int:
         print("no notebook sources match", args.prefixes, file=sys.stderr)
         return 1
     for s in sources:
-        print("wrote", build(s, execute=not args.no_execute).relative_to(ROOT))
+        target = update_markdown(s) if args.markdown_only else build(s, execute=not args.no_execute)
+        print("wrote", target.relative_to(ROOT))
     return 0
 
 
