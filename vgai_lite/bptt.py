@@ -404,14 +404,11 @@ def load_or_train_vgai(path: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrain
     """Load the VGAI at ``path`` if it was trained, to the end, with exactly ``cfg`` and ``tcfg``;
     otherwise train it (about half an hour at the defaults) and save it there. Returns
     (controller, whether it was trained now)."""
-    from .checkpoints import load_controller, read_checkpoint
+    from .checkpoints import is_finished_with, load_controller
 
     path = Path(path)
-    if path.is_file() and not retrain:
-        payload = read_checkpoint(path)
-        if (payload["config"] == dataclasses.asdict(cfg) and payload["meta"].get("train_config") == tcfg.to_dict()
-                and payload["meta"].get("finished")):
-            return load_controller(path), False
+    if not retrain and is_finished_with(path, cfg, tcfg.to_dict()):
+        return load_controller(path), False
     controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress)
     return controller, True
 

@@ -51,6 +51,18 @@ def read_checkpoint(path: Union[str, Path]) -> dict:
     return payload
 
 
+def is_finished_with(path: Union[str, Path], cfg: FlockConfig, train_config: dict) -> bool:
+    """True when ``path`` holds a controller whose training ran to the end with exactly ``cfg``
+    and the training configuration ``train_config`` (a dict, as stored): the load-or-train rule."""
+    path = Path(path)
+    if not path.is_file():
+        return False
+    payload = read_checkpoint(path)
+    meta = payload["meta"]
+    return (payload["config"] == dataclasses.asdict(cfg) and meta.get("train_config") == train_config
+            and bool(meta.get("finished")))
+
+
 def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, device=None):
     """Rebuild the controller stored at ``path``.
 

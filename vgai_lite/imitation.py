@@ -20,7 +20,7 @@ import torch
 import torch.nn.functional as nnf
 from tqdm.auto import tqdm
 
-from .checkpoints import load_controller, read_checkpoint, save_controller
+from .checkpoints import is_finished_with, load_controller, save_controller
 from .config import FlockConfig
 from .controllers import expert_control
 from .evaluate import relative_cost
@@ -200,10 +200,7 @@ def load_or_train(path: Union[str, Path], cfg: FlockConfig, tcfg: DAGNNTrainConf
     otherwise train it (minutes) and save it there. The training history is in ``controller.meta``."""
     path = Path(path)
     if path.is_file() and not retrain:
-        payload = read_checkpoint(path)
-        meta = payload["meta"]
-        if (payload["config"] == dataclasses.asdict(cfg) and meta.get("train_config") == tcfg.to_dict()
-                and meta.get("finished")):
+        if is_finished_with(path, cfg, tcfg.to_dict()):
             return load_controller(path, device=device)
         print(f"{path.name} was trained with another configuration (or did not finish): training again")
     controller, history = train_dagnn(cfg, tcfg, checkpoint=path, device=device, progress=progress)

@@ -207,22 +207,19 @@ def model_path(spec: ModelSpec, out: Path) -> Path:
     return _shipped_path(spec) or out / "models" / f"{spec.name}_{spec.key()}.pt"
 
 
-def obtain(spec: ModelSpec, out: Path, progress: bool = False):
-    """The trained controller of ``spec``: loaded if a finished checkpoint of the same
-    configuration exists, else trained now and saved. Returns (controller, seconds trained now)."""
-    from .controllers import LocalController
-
+def obtain(spec: ModelSpec, out: Path, progress: bool = False) -> tuple[Optional[Path], float]:
+    """Make sure ``spec`` has a finished checkpoint (train and save it now if none of the same
+    configuration exists). Returns (its path, None for the local heuristic; seconds trained now)."""
     if spec.kind == "local":
-        return LocalController(spec.cfg), 0.0
+        return None, 0.0
     path = model_path(spec, out)
     path.parent.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     if spec.kind == "dagnn":
-        controller = load_or_train(path, spec.cfg, spec.tcfg, progress=progress)
+        load_or_train(path, spec.cfg, spec.tcfg, progress=progress)
     else:
-        controller, _ = load_or_train_vgai(path, spec.cfg, spec.tcfg, progress=progress)
-    controller.checkpoint = path
-    return controller, time.perf_counter() - start
+        load_or_train_vgai(path, spec.cfg, spec.tcfg, progress=progress)
+    return path, time.perf_counter() - start
 
 
 # ---------------------------------------------------------------------------------------------
@@ -234,6 +231,7 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
     """Fly the controller of ``spec`` in ``flight`` (episodes from ``seed``) and record its figures;
     read from OUT/cells/ if this exact cell was computed before."""
     from .checkpoints import load_controller
+    from .controllers import LocalController
     from .evaluate import relative_cost
 
     ident = {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
@@ -241,12 +239,9 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
     path = out / "cells" / f"{key}.json"
     if path.is_file():
         return {**json.loads(path.read_text()), "computed_now": False}
-    controller, train_seconds = obtain(spec, out, progress)
-    ckpt = getattr(controller, "checkpoint", None)
-    if spec.kind != "local":
-        controller = load_controller(ckpt, cfg=flight)  # fly it in this configuration
-    else:
-        controller = type(controller)(flight)
+    ckpt, train_seconds = obtain(spec, out, progress)
+    # fly it in this column's configuration (trained in spec.cfg)
+    controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
     start = time.perf_counter()
     res = relative_cost(controller, flight, episodes=episodes, seed=seed, name=spec.name)
     record = {"key": key, **ident, "name": spec.name, **res.summary(),
