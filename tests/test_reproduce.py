@@ -1,6 +1,7 @@
 """`python -m vgai_lite reproduce` (issue 6): plan, reuse of shipped models, a quick run of every table."""
 
 import csv
+import dataclasses
 import json
 
 import pytest
@@ -83,3 +84,18 @@ def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
     assert sorted((tmp_path / "cells").glob("*.json")) == cells
     assert all(p.stat().st_mtime_ns == stamps[p] for p in cells)
     assert again["tables"]["K"] == results["tables"]["K"]
+
+
+def test_retrain_trains_every_model_again_and_recomputes_every_cell(tmp_path):
+    rc = ReproduceConfig(quick=True, seeds=1)
+    first = run(["K"], rc, out=tmp_path, progress=False)
+    models = sorted((tmp_path / "models").glob("*.pt"))
+    assert len(models) == 6  # DAGNN and VGAI at K - 1 = 1, 2, 3; the three VGAIs share one stage 1
+    stamps = {p: p.stat().st_mtime_ns for p in models + sorted((tmp_path / "cells").glob("*.json"))}
+    assert len(list((tmp_path / "stage1").glob("*.pt"))) == 1
+    again = run(["K"], dataclasses.replace(rc, retrain=True), out=tmp_path, progress=False)
+    assert all(p.stat().st_mtime_ns != t for p, t in stamps.items())
+    runs = again["provenance"]["invocations"]
+    assert [r["retrain"] for r in runs] == [False, True]
+    assert runs[0]["models_trained_now"] == runs[1]["models_trained_now"] == 6
+    assert runs[1]["cells_computed_now"] == first["provenance"]["compute_seconds"]["cells"]

