@@ -27,3 +27,13 @@ def test_committed_notebook_matches_its_source_and_was_executed(source):
         f"rebuild it: python tools/build_notebooks.py {source.stem[:2]}"
     code = [c for c in committed.cells if c.cell_type == "code"]
     assert all(c.get("execution_count") for c in code), "commit notebooks executed, outputs visible"
+
+
+def test_readme_results_section_is_the_one_the_records_give():
+    """The README's numbers are written by tools/readme_results.py from data/: none typed by hand."""
+    from readme_results import BEGIN, END, README, section
+
+    text = README.read_text()
+    assert text.count(BEGIN) == 1 and text.count(END) == 1
+    committed = BEGIN + text.split(BEGIN)[1].split(END)[0] + END
+    assert committed == section(), "run `python tools/readme_results.py --write`"

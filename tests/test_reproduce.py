@@ -99,3 +99,15 @@ def test_retrain_trains_every_model_again_and_recomputes_every_cell(tmp_path):
     assert [r["retrain"] for r in runs] == [False, True]
     assert runs[0]["models_trained_now"] == runs[1]["models_trained_now"] == 6
     assert runs[1]["cells_computed_now"] == first["provenance"]["compute_seconds"]["cells"]
+
+
+def test_extras_add_a_vgai_trained_at_each_radius_only_when_asked():
+    plain = plan(ReproduceConfig(), ["R"])
+    extra = plan(ReproduceConfig(extras=True), ["R"])
+    assert not any(row == "VGAI (retrained)" for _, row, *_ in plain)
+    retrained = {column: spec for _, row, column, spec, flight, _ in extra if row == "VGAI (retrained)"}
+    assert sorted(retrained) == [1.0, 1.5, 2.0]
+    for column, spec in retrained.items():
+        assert spec.kind == "vgai" and spec.cfg.R == column
+    assert _shipped_path(retrained[1.5]) == DATA_DIR / "vgai" / "vgai_F24.pt"  # R = 1.5 is the default VGAI
+    assert _shipped_path(retrained[2.0]) is None

@@ -194,7 +194,8 @@ def cmd_reproduce(args, extra):
 
     torch.set_num_threads(args.threads)
     rc = ReproduceConfig(quick=args.quick, seeds=args.seeds, vgai_seeds=args.vgai_seeds,
-                         episodes=args.episodes, episodes_large=args.episodes_large, retrain=args.retrain)
+                         episodes=args.episodes, episodes_large=args.episodes_large, retrain=args.retrain,
+                         extras=args.extras)
     for t in args.only or []:
         if t not in TABLES:
             raise SystemExit(f"--only takes table names {list(TABLES)}, got {t!r}")
@@ -266,6 +267,8 @@ def main(argv=None):
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--retrain", action="store_true",
                    help="from scratch: train every model anew (shipped checkpoints included) and recompute every cell")
+    p.add_argument("--extras", action="store_true",
+                   help="also our rows beyond the paper's that need VGAI trainings (VGAI retrained at R = 1.0, 2.0)")
     p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
     p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
     p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")

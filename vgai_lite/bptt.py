@@ -502,5 +502,7 @@ def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bo
     if write_json:
         write_evaluation(path.with_suffix(".json"), result, cfg,
                          extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
+                                "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
+                                "stage1_cached": hist.get("stage1_cached"),  # then not in train_seconds
                                 "validation": hist["rounds"]})
     return controller, result

@@ -65,7 +65,7 @@ TABLES: dict[str, dict] = {
     "v_init": {"title": "Table 2a: initial velocity v_init [m/s]", "column": "v_init", "columns": [1.0, 2.0, 3.0],
                "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"]},
     "R": {"title": "Table 2b: communication radius R [m]", "column": "R", "columns": [1.0, 1.5, 2.0],
-          "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"]},
+          "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"], "extra_rows": ["VGAI (retrained)"]},
     "N": {"title": "Table 3: trained on N = 50, flown by N' agents", "column": "N'",
           "columns": [50, 60, 75, 100, 200], "rows": ["DAGNN", "Local", "VGAI"]},
 }
@@ -80,12 +80,14 @@ class ReproduceConfig:
             VGAI episode renders N'^2 drone views per step.
         seed: seed of the held-out initial conditions (the book's EVAL_SEED).
         seeds: training seeds 0..seeds-1 of the DAGNN rows (spread over training seeds);
-        vgai_seeds: the same for VGAI (each costs a VGAI training of about half an hour).
+        vgai_seeds: the same for VGAI (each costs a VGAI training of about a quarter of an hour).
         quick: tiny trainings and short episodes, every table in small form (the tests).
         repair_from: N' from which initial conditions use the "repair" sampler (whole-swarm rejection
             accepts about 1 draw in 400,000 at N' = 75).
         retrain: from scratch: train every model the run needs anew (overwriting its checkpoint, the
             shipped ones included) and recompute every cell, ignoring what earlier runs left.
+        extras: also the rows beyond the paper's that cost VGAI trainings (``extra_rows`` of
+            TABLES): a VGAI retrained at R = 1.0 and 2.0 m (two more trainings).
     """
 
     episodes: int = 30
@@ -96,6 +98,7 @@ class ReproduceConfig:
     quick: bool = False
     repair_from: int = 75
     retrain: bool = False
+    extras: bool = False
 
     def __post_init__(self):
         for name in ("episodes", "episodes_large", "seeds", "vgai_seeds"):
@@ -153,9 +156,16 @@ def _dagnn(rc, K=4, seed=0, **cfg_changes) -> ModelSpec:
                      f"dagnn_K{K}" + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}")
 
 
-def _vgai(rc, F=24, K=4, seed=0) -> ModelSpec:
+def _vgai(rc, F=24, K=4, seed=0, **cfg_changes) -> ModelSpec:
     t = VGAITrainConfig(F=F, K=K, seed=seed)
-    return ModelSpec("vgai", _base_cfg(rc), _quick_vgai(t) if rc.quick else t, f"vgai_F{F}_K{K}_s{seed}")
+    return ModelSpec("vgai", _base_cfg(rc, **cfg_changes), _quick_vgai(t) if rc.quick else t,
+                     f"vgai_F{F}_K{K}" + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}")
+
+
+def rows_of(rc: ReproduceConfig, table: str) -> list[str]:
+    """The rows a run computes for ``table``: the paper's, and ours beyond them if ``rc.extras``."""
+    t = TABLES[table]
+    return t["rows"] + (t.get("extra_rows", []) if rc.extras else [])
 
 
 def models_of(rc: ReproduceConfig, table: str, row: str, column) -> list[ModelSpec]:
@@ -163,9 +173,12 @@ def models_of(rc: ReproduceConfig, table: str, row: str, column) -> list[ModelSp
     if row == "Local":
         return [ModelSpec("local", _base_cfg(rc), None, "local")]
     dagnn_seeds, vgai_seeds = range(rc.seeds), range(rc.vgai_seeds)
-    if row == "DAGNN (retrained)":
-        key = {"v_init": "v_init", "R": "R"}[table]
-        return [_dagnn(rc, seed=s, **{key: float(column)}) for s in dagnn_seeds]
+    if row in ("DAGNN (retrained)", "VGAI (retrained)"):
+        if table not in ("v_init", "R"):
+            raise ValueError(f"row {row!r} exists only in the v_init and R tables, not {table!r}")
+        if row.startswith("DAGNN"):
+            return [_dagnn(rc, seed=s, **{table: float(column)}) for s in dagnn_seeds]
+        return [_vgai(rc, seed=s, **{table: float(column)}) for s in vgai_seeds]
     if row == "DAGNN":
         K = int(column) + 1 if table == "K" else 4
         return [_dagnn(rc, K=K, seed=s) for s in dagnn_seeds]
@@ -284,7 +297,7 @@ def plan(rc: ReproduceConfig, tables: list[str]) -> list[tuple]:
         t = TABLES[table]
         for column in t["columns"]:
             flight = flight_config(rc, table, column)
-            for row in t["rows"]:
+            for row in rows_of(rc, table):
                 if table == "F" and row == "DAGNN" and column != 6:
                     continue  # the DAGNN's features are its 6 exact ones
                 for spec in models_of(rc, table, row, column):
@@ -292,7 +305,7 @@ def plan(rc: ReproduceConfig, tables: list[str]) -> list[tuple]:
     return jobs
 
 
-TRAIN_SECONDS = {"local": 0.0, "dagnn": 60.0, "vgai": 1800.0}
+TRAIN_SECONDS = {"local": 0.0, "dagnn": 60.0, "vgai": 800.0}
 EPISODE_SECONDS = {"local": 0.1, "dagnn": 0.2, "vgai": 3.0}
 """Rough seconds to train a model and to fly one episode of 200 steps with 50 agents on this
 machine: the progress display's estimate of the time left (nothing else uses them)."""
@@ -412,7 +425,7 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
     for table in tables:
         t = TABLES[table]
         entry = {"title": t["title"], "column": t["column"], "columns": t["columns"], "rows": {}}
-        for row in t["rows"]:
+        for row in rows_of(rc, table):
             cells = {}
             for column in t["columns"]:
                 if (table, row, column) not in records:
