@@ -13,8 +13,6 @@
 #
 # ```bash
 # python -m vgai_lite reproduce                 # every table (trains what is missing, then evaluates)
-# python -m vgai_lite reproduce --retrain --seeds 1   # the same from scratch: every model trained anew
-# python -m vgai_lite reproduce --extras        # and our rows beyond the paper's (VGAI retrained per R)
 # python -m vgai_lite reproduce --only K R      # some tables
 # python -m vgai_lite reproduce --quick --out /tmp/q   # every table in miniature, about a minute
 # ```
@@ -41,10 +39,9 @@ from vgai_lite.book import EVAL_SEED, ROOT, pick
 from vgai_lite.graphs import adjacency
 from vgai_lite.reproduce import PAPER, TABLES, load_results
 
-RERUN = False  # True: run `python -m vgai_lite reproduce --extras` first (reuses what is computed; see above)
+RERUN = False  # True: run `python -m vgai_lite reproduce` first (reuses what is computed; see above)
 if RERUN:
-    done = subprocess.run([sys.executable, "-m", "vgai_lite", "reproduce", "--extras"], capture_output=True,
-                          text=True, cwd=ROOT)
+    done = subprocess.run([sys.executable, "-m", "vgai_lite", "reproduce"], capture_output=True, text=True, cwd=ROOT)
     print(done.stdout[-3000:] if done.returncode == 0 else done.stderr[-3000:])
 
 results = load_results()  # the committed full run: data/results/results.json
@@ -52,22 +49,19 @@ prov = results["provenance"]
 cs = prov["compute_seconds"]
 print(f"results assembled {prov['started']} at commit {(prov['git_commit'] or '?')[:10]}: {cs['cells']} cells, "
       f"{cs['cells_computed_now']} computed by that invocation, the others read back from data/results/cells/")
+print(f"evaluation time summed over the cells when they were computed: {cs['evaluation'] / 60:.0f} min; "
+      f"training time recorded in the checkpoints used: {cs['training_recorded'] / 60:.0f} min "
+      "(wall times on a shared machine, see the note below)")
 print("settings:", prov["reproduce_config"])
-print("\nthe invocations of the command that computed these results (newest last):")
-for inv in prov.get("invocations", []):
-    print(f"  {inv['started']}  {inv['command']}\n      {inv['wall_seconds'] / 60:5.1f} min wall, "
-          f"{inv['models_trained_now']} models trained, {inv['cells_computed_now']} cells computed "
-          f"(tables {' '.join(inv['tables'])}){'  [from scratch]' if inv['retrain'] else ''}")
 
 # %% [markdown]
 # ## How the experiments are set up, and where the paper is silent
 #
-# * **Time.** The list above gives each invocation's wall time on this 2-core machine. The one
-#   marked *from scratch* (`reproduce --retrain --seeds 1`) trained every model the paper's tables
-#   need, one training seed each (the shipped checkpoints included, overwritten), and evaluated
-#   every cell, alone on the machine. The three VGAIs with F = 24 (K - 1 = 1, 2, 3) share their
-#   first training stage, which does not depend on K. Later invocations added the DAGNN's other
-#   training seeds and our extra rows, reading every cell already computed.
+# * **Time.** The committed cells were computed by several invocations of the command on this
+#   2-core machine while VGAI trainings ran beside them (up to five processes), so the summed times
+#   printed above overstate what a run alone costs: alone, one VGAI evaluation episode takes about
+#   0.8 s and a default VGAI training is projected at about 20 minutes
+#   (`python -m vgai_lite benchmark --vgai`).
 # * **Same episodes for everyone.** Every cell of a column is flown from the same held-out initial
 #   conditions (seed 2020, never used in training); the relative cost of a cell is the mean of its
 #   costs over the mean of the expert's on those episodes, with a 95% bootstrap interval.
@@ -76,7 +70,7 @@ for inv in prov.get("invocations", []):
 #   evaluated on 50 episodes in notebook 06).
 # * **Training seeds.** The DAGNN rows are trained with three seeds (a DAGNN trains in under a
 #   minute) and report the mean over seeds with its standard deviation; VGAI rows use one seed (a
-#   VGAI trains in about a quarter of an hour on this machine).
+#   VGAI trains in about half an hour on this machine).
 # * **Tables 2a and 2b** (initial velocity, radius): the paper does not say whether it retrains. Its
 #   section is about robustness, so the rows DAGNN and VGAI are the controllers trained at the
 #   defaults ($v_{init} = 3$, $R = 1.5$) and flown in each condition; the row *DAGNN (retrained)*
@@ -115,7 +109,7 @@ def table_markdown(table):
 def plot_table(ax, table, logx=False):
     t = results["tables"][table]
     cols = t["columns"]
-    colors = {"DAGNN": "C0", "DAGNN (retrained)": "C9", "Local": "C3", "VGAI": "C2", "VGAI (retrained)": "C8"}
+    colors = {"DAGNN": "C0", "DAGNN (retrained)": "C9", "Local": "C3", "VGAI": "C2"}
     for row, cells in t["rows"].items():
         xs = [c for c in cols if str(c) in cells]
         ys = [cells[str(c)]["relative_cost_mean"] for c in xs]
@@ -189,12 +183,9 @@ for row in ("DAGNN", "VGAI"):
     findings.append((f"more exchanges help {row} (Table 1b decreasing in K-1)",
                      decreasing(paper_series("K", row)), decreasing(series("K", row)),
                      " → ".join(f"{x:.2f}" for x in series("K", row))))
-for row in ("DAGNN", "DAGNN (retrained)", "Local", "VGAI", "VGAI (retrained)"):
-    if len(series("R", row)) < 2:
-        continue  # a row this run did not compute (VGAI (retrained) needs --extras)
-    base = row.split(" (")[0]
+for row in ("DAGNN", "Local", "VGAI"):
     findings.append((f"larger R helps {row} (Table 2b decreasing in R)",
-                     decreasing(paper_series("R", base)), decreasing(series("R", row)),
+                     decreasing(paper_series("R", row)), decreasing(series("R", row)),
                      " → ".join(f"{x:.2f}" for x in series("R", row))))
 for row in ("DAGNN", "Local", "VGAI"):
     findings.append((f"higher v_init is harder for {row} (Table 2a increasing)",
