@@ -11,7 +11,8 @@ Introduced in notebook 07. Five tables (relative cost, the centralized expert = 
 The paper does not say whether the v_init and R tables retrain the controllers (its section is
 about "robustness to different initial conditions"). Our choice: the rows DAGNN and VGAI are the
 controllers trained at the defaults (v_init = 3, R = 1.5), flown in each condition; the row
-"DAGNN (retrained)" is a DAGNN trained in that condition, which is cheap, to show what retraining buys.
+"DAGNN (retrained)" is a DAGNN trained in that condition, which is cheap, to show what retraining buys;
+with ``--extras``, the row "VGAI (retrained)" of Table 2b does the same for VGAI (two more trainings).
 
 Every cell of a column is evaluated on the same held-out initial conditions (seed
 ``book.EVAL_SEED``), so controllers are compared episode by episode. A cell is one
@@ -73,7 +74,8 @@ TABLES: dict[str, dict] = {
 
 @dataclass(frozen=True)
 class ReproduceConfig:
-    """What a reproduction run does; the defaults are the committed full run.
+    """What a reproduction run does. The committed data/results/ are the defaults with ``extras``
+    (``python -m vgai_lite reproduce --extras``), after a from-scratch run (``--retrain --seeds 1``).
 
     Attributes:
         episodes: held-out episodes per cell (N' <= 75); ``episodes_large`` for N' >= 100, where a
@@ -150,16 +152,21 @@ def _base_cfg(rc: ReproduceConfig, **changes) -> FlockConfig:
     return cfg.replace(T=QUICK_T) if rc.quick else cfg
 
 
+def _name(stem: str, seed: int, cfg_changes: dict) -> str:
+    """A model's file name: stem, the flight settings it was trained with, its seed (dagnn_K4_R2_s0)."""
+    return stem + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}"
+
+
 def _dagnn(rc, K=4, seed=0, **cfg_changes) -> ModelSpec:
     t = dataclasses.replace(DAGNNTrainConfig(K=K), seed=seed)
     return ModelSpec("dagnn", _base_cfg(rc, **cfg_changes), _quick_dagnn(t) if rc.quick else t,
-                     f"dagnn_K{K}" + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}")
+                     _name(f"dagnn_K{K}", seed, cfg_changes))
 
 
 def _vgai(rc, F=24, K=4, seed=0, **cfg_changes) -> ModelSpec:
     t = VGAITrainConfig(F=F, K=K, seed=seed)
     return ModelSpec("vgai", _base_cfg(rc, **cfg_changes), _quick_vgai(t) if rc.quick else t,
-                     f"vgai_F{F}_K{K}" + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}")
+                     _name(f"vgai_F{F}_K{K}", seed, cfg_changes))
 
 
 def rows_of(rc: ReproduceConfig, table: str) -> list[str]:
