@@ -461,7 +461,7 @@ def load_or_train_vgai(path: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrain
                        progress: bool = True, stage1_cache: Optional[Union[str, Path]] = None
                        ) -> tuple[VGAIController, bool]:
     """Load the VGAI at ``path`` if it was trained, to the end, with exactly ``cfg`` and ``tcfg``;
-    otherwise train it (about half an hour at the defaults) and save it there. Returns
+    otherwise train it (about 11 minutes at the defaults on two CPU cores) and save it there. Returns
     (controller, whether it was trained now)."""
     from .checkpoints import is_finished_with, load_controller
 
@@ -484,7 +484,7 @@ VGAI_RUNS: dict[str, VGAITrainConfig] = {
 
 def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
               write_json: bool = False):
-    """Load (or train, about half an hour) the book's VGAI ``name`` and evaluate it on ``episodes``
+    """Load (or train, about 11 minutes) the book's VGAI ``name`` and evaluate it on ``episodes``
     held-out episodes. Writes data/vgai/NAME.json with the evaluation when it trained the model or
     when ``write_json`` (the command line's train-vgai does), so that a notebook run in quick mode
     never overwrites the shipped record. Returns (controller, RelativeCost)."""

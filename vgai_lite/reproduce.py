@@ -34,6 +34,7 @@ import platform
 import subprocess
 import sys
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Union
@@ -243,11 +244,12 @@ def obtain(spec: ModelSpec, out: Path, progress: bool = False,
     path.parent.mkdir(parents=True, exist_ok=True)
     trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
     start = time.perf_counter()
-    if spec.kind == "dagnn":
-        load_or_train(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress)
-    else:
-        load_or_train_vgai(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress,
-                           stage1_cache=out / "stage1")
+    if trained:  # otherwise the checkpoint is ready; evaluate_cell loads it in the flight configuration
+        if spec.kind == "dagnn":
+            load_or_train(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress)
+        else:
+            load_or_train_vgai(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress,
+                               stage1_cache=out / "stage1")
     return path, time.perf_counter() - start, trained
 
 
@@ -411,8 +413,9 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
     if previous.is_file():
         try:
             history = json.loads(previous.read_text())["provenance"].get("invocations", [])
-        except (ValueError, KeyError):
-            history = []
+        except (ValueError, KeyError) as err:
+            warnings.warn(f"{previous} is not a results file of this command ({err!r}): the list of earlier "
+                          "invocations starts again with this one")
     every = {r["key"]: r for recs in records.values() for r in recs}.values()
     trained = {r["checkpoint"]: r.get("train_seconds_recorded", 0.0) for r in every if r.get("checkpoint")}
     results["provenance"]["compute_seconds"] = {
