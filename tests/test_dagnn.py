@@ -7,8 +7,9 @@ from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_sta
 from vgai_lite.checkpoints import load_controller, save_controller
 from vgai_lite.features import local_features
 from vgai_lite.graphs import adjacency, k_hop_reach
-from vgai_lite.imitation import DAGNNTrainConfig, collect, train_dagnn
-from vgai_lite.models import AggregationMLP, DAGNNController
+from vgai_lite.dagnn_training import DAGNNTrainConfig, collect, train_dagnn
+from vgai_lite.learned_controllers import DAGNNController
+from vgai_lite.models import AggregationMLP
 
 
 def make_controller(K=3, seed=0, cfg=None):
@@ -132,12 +133,12 @@ def test_dagger_collection_with_p0_labels_the_expert_trajectory():
     r0, v0 = sample_initial_state(cfg, 2, torch.Generator().manual_seed(0))
     c = make_controller(K=3, cfg=cfg)
     c.model.float()
-    Z, U, t = collect(c, cfg, r0, v0, p_learner=0.0, generator=torch.Generator().manual_seed(0))
+    Z, U = collect(c, cfg, r0, v0, p_learner=0.0, generator=torch.Generator().manual_seed(0))
     traj = rollout(ExpertController(cfg), cfg, r0, v0)
     assert Z.shape == (15 * 2 * 10, 3, 6) and U.shape == (300, 2)
     torch.testing.assert_close(U, traj.u.reshape(-1, 2))  # rows are (t, b, i) in order
     # with p = 1 the swarm follows the learner: the labels differ from the expert's trajectory
-    _, U1, _ = collect(c, cfg, r0, v0, p_learner=1.0, generator=torch.Generator().manual_seed(0))
+    _, U1 = collect(c, cfg, r0, v0, p_learner=1.0, generator=torch.Generator().manual_seed(0))
     assert not torch.allclose(U1, U)
 
 

@@ -6,10 +6,11 @@ import json
 
 import pytest
 
-from vgai_lite.bptt import VGAI_RUNS
 from vgai_lite.book import DATA_DIR
 from vgai_lite.config import FlockConfig
-from vgai_lite.reproduce import (PAPER, TABLES, ReproduceConfig, _shipped_path, flight_config, models_of, plan,
+from vgai_lite.runs import VGAI_RUNS
+from vgai_lite.table_cells import _shipped_path
+from vgai_lite.reproduce import (PAPER, TABLES, ReproduceConfig, flight_config, models_of, plan,
                                  run)
 
 

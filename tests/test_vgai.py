@@ -5,11 +5,16 @@ import dataclasses
 import pytest
 import torch
 
-from vgai_lite import FlockConfig, rollout, sample_initial_state
+from vgai_lite import FlockConfig, rollout, sample_initial_state, saturate
 from vgai_lite.checkpoints import load_controller, save_controller
-from vgai_lite.models import (AggregationMLP, ResidualBlock, VGAIController, VGAIModel, VisionConfig,
-                              VisualCNN)
+from vgai_lite.aggregation import aggregation_sequence
+from vgai_lite.checkpoints import load_estimator, save_estimator
+from vgai_lite.graphs import adjacency, gso
+from vgai_lite.learned_controllers import VGAIController
+from vgai_lite.models import AggregationMLP, ResidualBlock, VGAIModel, VisualCNN
 from vgai_lite.render import RenderConfig
+from vgai_lite.vgai_training import VGAITrainConfig, bptt_loss, stage1_cache_file, train_vgai
+from vgai_lite.vision import MOTION_SCALE, VisionConfig, camera_input, stored_images
 
 CFG = FlockConfig(N=20)
 VISION = VisionConfig(render=RenderConfig(view_height=8, view_width=16))
@@ -17,7 +22,7 @@ VISION = VisionConfig(render=RenderConfig(view_height=8, view_width=16))
 
 def make_vgai(cfg=CFG, vision=VISION, F=6, K=3, seed=0):
     torch.manual_seed(seed)
-    C, H, W = vision.image_shape(cfg)
+    C, H, W = vision.image_shape()
     model = VGAIModel(VisualCNN(C, H, W, F, (4, 8), 16), AggregationMLP(K, F, (16,))).double().eval()
     return VGAIController(model, cfg, vision)
 
@@ -52,15 +57,32 @@ def test_vgai_sees_only_images_not_velocities():
 
 
 def test_prehistory_frames_are_the_initial_state_flown_backwards():
-    from vgai_lite.bptt import _images
-
     vision = VISION
     cfg = CFG.replace(T=8)
     r0, v0 = sample_initial_state(cfg, 1, torch.Generator().manual_seed(3), dtype=torch.float64)
     traj = rollout(make_vgai(vision=vision), cfg, r0, v0)
-    img = _images(vision, cfg, traj.r, traj.v, torch.tensor([0]), torch.tensor([2]))
-    earlier = vision.frame(r0 + (2 - vision.motion_gap) * cfg.Ts * v0, cfg)
-    torch.testing.assert_close(img, vision.combine(vision.frame(traj.r[2], cfg), earlier), atol=1e-5, rtol=1e-5)
+    img = stored_images(vision, cfg, traj.r, traj.v, torch.tensor([0]), torch.tensor([2]))
+    now, earlier = vision.frame(traj.r[2], cfg), vision.frame(r0 + (2 - vision.motion_gap) * cfg.Ts * v0, cfg)
+    torch.testing.assert_close(img, torch.cat((now, MOTION_SCALE * (now - earlier)), dim=2), atol=1e-5, rtol=1e-5)
+
+
+def test_the_controller_and_the_bptt_window_compute_the_same_actions():
+    """One pipeline: along a flight, the controller's action at step t (step by step, its own frame
+    memory and aggregation buffer) is the window form's action at t (stored flight, unrolled eq. 6),
+    the form K-step BPTT differentiates."""
+    c = make_vgai(K=3)
+    cfg = CFG.replace(T=9)
+    r0, v0 = sample_initial_state(cfg, 2, torch.Generator().manual_seed(4), dtype=torch.float64)
+    traj = rollout(c, cfg, r0, v0)
+    K, t = 3, torch.tensor([1, 8])  # a window that starts before t = 0, and one inside the flight
+    e = torch.tensor([0, 1])
+    tau = t[:, None] - (K - 1) + torch.arange(K)
+    valid = (tau >= 0).double()[:, :, None, None]
+    tau_c, ee = tau.clamp(min=0).flatten(), e[:, None].expand_as(tau).flatten()
+    X = c.model.features(stored_images(VISION, cfg, traj.r, traj.v, ee, tau_c)).view(2, K, cfg.N, -1) * valid
+    S = gso(adjacency(traj.r[tau_c, ee], cfg.R)).view(2, K, cfg.N, cfg.N) * valid
+    u_window = c.model.mlp(aggregation_sequence(X, S, K)[:, -1])
+    torch.testing.assert_close(saturate(u_window, cfg), traj.u[t, e])
 
 
 def test_vgai_is_permutation_equivariant_over_a_rollout():
@@ -94,13 +116,21 @@ def test_motion_frames_change_the_input_only_when_something_moves():
     for _ in range(vision.motion_gap + 1):
         X_still = c.features(r, torch.zeros_like(r))  # hovering: the frames before t = 0 are the same
     C0 = len(vision.render.channels)
-    img = vision.combine(vision.frame(r, CFG), vision.frame(r, CFG))
+    img = camera_input(vision, CFG, r, r)
     assert img.shape[2] == 2 * C0 and img[:, :, C0:].abs().max() == 0  # difference channels empty
     shifted = c.features(r + 0.5)  # the whole swarm translated: every view, hence X, is the same
     torch.testing.assert_close(shifted, X_still)
     moved = r.clone()
     moved[:, 3] += 0.1  # one drone moves: the others see it
     assert not torch.allclose(c.features(moved), X_still)
+
+
+def test_a_vision_config_written_without_a_field_is_refused_not_defaulted():
+    d = VISION.to_dict()
+    assert VisionConfig.from_dict(d) == VISION
+    del d["prehistory"]
+    with pytest.raises(ValueError, match="prehistory"):
+        VisionConfig.from_dict(d)
 
 
 def test_bad_vision_configs_are_refused():
@@ -114,8 +144,6 @@ def test_bad_vision_configs_are_refused():
 
 
 def test_a_miniature_vgai_training_runs_end_to_end_and_backpropagates_through_K_steps(tmp_path):
-    from vgai_lite.bptt import VGAITrainConfig, train_vgai
-
     cfg = FlockConfig(N=12, T=20)
     tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
@@ -129,8 +157,6 @@ def test_a_miniature_vgai_training_runs_end_to_end_and_backpropagates_through_K_
 def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_path):
     """The K = 2, 3, 4 runs share stage 1 (visual state estimation): a run reading it from the cache
     must end with the same weights as a run training it, and a run of another K must reuse it."""
-    from vgai_lite.bptt import VGAITrainConfig, stage1_cache_file, train_vgai
-
     cfg = FlockConfig(N=12, T=20)
     tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
@@ -152,15 +178,11 @@ def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_p
 
 def test_gradients_reach_the_cnn_through_every_step_of_the_window():
     """K-step BPTT: the action at the window's end depends on the images of all K steps."""
-    from vgai_lite.aggregation import aggregation_sequence
-    from vgai_lite.graphs import adjacency, gso
-
     c = make_vgai(K=3)
     cfg = CFG.replace(T=3)
     r0, v0 = sample_initial_state(cfg, 1, torch.Generator().manual_seed(0), dtype=torch.float64)
     r = rollout(c, cfg, r0, v0).r[:, 0]  # (K, N, 2)
-    imgs = torch.stack([VISION.combine(VISION.frame(r[k:k + 1], cfg), VISION.frame(r[:1], cfg))[0]
-                        for k in range(3)]).requires_grad_(True)  # (K, N, C, H, W)
+    imgs = torch.stack([camera_input(VISION, cfg, r[k:k + 1], r[:1])[0] for k in range(3)]).requires_grad_(True)  # (K, N, C, H, W)
     X = c.model.cnn(imgs.flatten(0, 1)).view(1, 3, cfg.N, -1)
     S = gso(adjacency(r, cfg.R)).unsqueeze(0)
     u = c.model.mlp(aggregation_sequence(X, S, 3)[:, -1])
@@ -170,9 +192,7 @@ def test_gradients_reach_the_cnn_through_every_step_of_the_window():
 
 
 def test_state_estimator_files_round_trip(tmp_path):
-    from vgai_lite.bptt import load_estimator, save_estimator
-
-    C, H, W = VISION.image_shape(CFG)
+    C, H, W = VISION.image_shape()
     cnn = VisualCNN(C, H, W, 6, (2, 4), 8)
     path = save_estimator(tmp_path / "e.pt", cnn, VISION, {"steps": 1})
     cnn2, vision2, meta = load_estimator(path)

@@ -61,14 +61,10 @@ def build(source: Path, execute: bool) -> Path:
     nb = parse(source.read_text())
     target = TARGET / (source.stem + ".ipynb")
     if execute:
-        env_quick = os.environ.pop("VGAI_LITE_QUICK", None)  # committed notebooks run in full mode
+        env = {k: v for k, v in os.environ.items() if k != "VGAI_LITE_QUICK"}  # committed notebooks: full mode
         start = time.time()
-        try:
-            NotebookClient(nb, timeout=3600, kernel_name="python3",
-                           resources={"metadata": {"path": str(TARGET)}}).execute()
-        finally:
-            if env_quick is not None:
-                os.environ["VGAI_LITE_QUICK"] = env_quick
+        NotebookClient(nb, timeout=3600, kernel_name="python3",
+                       resources={"metadata": {"path": str(TARGET)}}).execute(env=env)
         print(f"executed {source.stem} in {time.time() - start:.0f} s")
     nbformat.write(nb, target)
     return target

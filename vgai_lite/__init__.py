@@ -2,17 +2,46 @@
 
 The book reproduces Hu, Gama, Chen, Wang, Ribeiro, Sadler, "VGAI: End-to-End Learning of
 Vision-Based Decentralized Controllers for Robot Swarms" (CoRL 2020). Modules follow the paper's
-pipeline: ``config`` (constants), ``flocking`` (dynamics, initial conditions, cost, rollouts),
-``controllers`` (expert, local heuristic), ``evaluate`` (relative cost), ``viz`` (pictures),
-``exercises`` (checks), ``book`` (quick mode, data paths).
+pipeline, one idea each; data flow one way, top to bottom (nothing imports a module below it in
+this list):
+
+  the problem      ``config`` (constants), ``flocking`` (dynamics, initial conditions, cost eq. 1,
+                   rollouts), ``controllers`` (expert eqs. 2-3, local heuristic), ``evaluate``
+                   (relative cost and close calls)
+  communication    ``graphs`` (who hears whom, S(t)), ``features`` (the DAGNN's 6 exact local
+                   features), ``aggregation`` (Z(t), eq. 6)
+  what drones see  ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference),
+                   ``vision`` (the CNN's input: frames, motion, one image pipeline)
+  learning         ``models`` (the networks: AggregationMLP eqs. 7-8, VisualCNN), ``learned_controllers``
+                   (DAGNNController, VGAIController), ``checkpoints`` (files), ``imitation`` (DAgger,
+                   what both trainings share), ``dagnn_training``, ``vgai_training`` (three stages,
+                   K-step BPTT), ``runs`` (the book's shipped models by name)
+  the paper's tables  ``paper`` (its numbers), ``table_cells``, ``reproduce``
+  the book         ``book`` (quick mode, data paths, seeds), ``viz``, ``viz3d``, ``exercises``,
+                   ``course``, ``benchmark``
+
+``import vgai_lite as vl`` gives every name the notebooks teach (``vl.rollout``, ``vl.gso``,
+``vl.render_egocentric``, ``vl.VGAIController``, ``vl.train_vgai``, ``vl.load_controller``, ...).
 """
 
+from .aggregation import AggregationBuffer, aggregation_sequence
+from .checkpoints import load_controller, load_estimator, save_controller
 from .config import FlockConfig
 from .controllers import (ExpertController, LocalController, expert_control, local_control,
                           potential, potential_gradient)
+from .dagnn_training import DAGNNTrainConfig, train_dagnn
 from .evaluate import RelativeCost, relative_cost
+from .features import local_features
 from .flocking import (Controller, Trajectory, flocking_cost, min_pair_distance, rollout,
                        sample_initial_state, saturate, step)
+from .graphs import adjacency, gso, k_hop_reach
+from .imitation import dagger_mix, fly_dagger, load_or_train
+from .learned_controllers import DAGNNController, VGAIController
+from .models import AggregationMLP, VGAIModel, VisualCNN
+from .render import RenderConfig, render_egocentric, render_topdown
+from .runs import book_dagnn, book_estimator, book_vgai
+from .vgai_training import VGAITrainConfig, bptt_loss, train_state_estimator, train_vgai
+from .vision import VisionConfig, camera_input
 
 __version__ = "0.1.0"
 
@@ -20,5 +49,10 @@ __all__ = [
     "FlockConfig", "sample_initial_state", "step", "saturate", "flocking_cost", "rollout",
     "Trajectory", "Controller", "min_pair_distance", "expert_control", "local_control",
     "potential", "potential_gradient", "ExpertController", "LocalController", "relative_cost",
-    "RelativeCost",
+    "RelativeCost", "adjacency", "gso", "k_hop_reach", "local_features", "AggregationBuffer",
+    "aggregation_sequence", "RenderConfig", "render_egocentric", "render_topdown", "VisionConfig",
+    "camera_input", "AggregationMLP", "VisualCNN", "VGAIModel", "DAGNNController", "VGAIController",
+    "save_controller", "load_controller", "load_estimator", "dagger_mix", "fly_dagger", "load_or_train",
+    "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "train_vgai", "bptt_loss",
+    "train_state_estimator", "book_dagnn", "book_vgai", "book_estimator",
 ]

@@ -130,14 +130,14 @@ def cmd_export(args, extra):
 def cmd_train_dagnn(args, extra):
     import torch
 
-    from .imitation import BOOK_RUNS, book_run
+    from .runs import DAGNN_RUNS, book_dagnn
 
-    names = sorted(BOOK_RUNS) if args.all else args.names
+    names = sorted(DAGNN_RUNS) if args.all else args.names
     if not names:
-        raise SystemExit(f"name one or more runs, or --all; the book's runs are {sorted(BOOK_RUNS)}")
+        raise SystemExit(f"name one or more runs, or --all; the book's runs are {sorted(DAGNN_RUNS)}")
     torch.set_num_threads(args.threads)
     for name in names:
-        controller, result = book_run(name, retrain=args.retrain, episodes=args.episodes)
+        controller, result = book_dagnn(name, retrain=args.retrain, episodes=args.episodes, write_json=True)
         print(result)
         print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote data/dagnn/{name}.pt and .json")
 
@@ -145,7 +145,7 @@ def cmd_train_dagnn(args, extra):
 def cmd_train_vgai(args, extra):
     import torch
 
-    from .bptt import ESTIMATOR_RUNS, VGAI_RUNS, book_estimator, book_vgai
+    from .runs import ESTIMATOR_RUNS, VGAI_RUNS, book_estimator, book_vgai
 
     torch.set_num_threads(args.threads)
     if args.estimators:

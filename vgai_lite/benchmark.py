@@ -15,7 +15,13 @@ import torch
 
 from .config import FlockConfig
 from .controllers import expert_control
+from .evaluate import relative_cost
 from .flocking import sample_initial_state, step
+from .imitation import EpisodeStore
+from .learned_controllers import VGAIController
+from .physics import raycast_depth
+from .render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
+from .vgai_training import VGAITrainConfig, bptt_loss, fit_state_estimator
 
 
 def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
@@ -84,9 +90,6 @@ def run(N: int = 50, batches=(1, 256), steps: int = 20, min_seconds: float = 2.0
 def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=None) -> list[dict]:
     """Agent-images per second of both renderers (default RenderConfig) and of the pymunk ray caster
     producing the same depth strip (one swarm at a time, as pymunk works)."""
-    from .physics import raycast_depth
-    from .render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
-
     cfg, rcfg = FlockConfig(N=N), RenderConfig()
     r, _ = sample_initial_state(cfg, swarms, torch.Generator().manual_seed(0), device=device)
     rows = []
@@ -105,19 +108,15 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     """Seconds per gradient step of VGAI's stage 1 (visual state estimation) and stage 3 (joint
     K-step BPTT), and per evaluation episode, at the default VGAITrainConfig; projects the time of
     a full default training from them (flight collection and validation included)."""
-    from .bptt import VGAITrainConfig, collect_episodes, fit_state_estimator, window_loss
-    from .evaluate import relative_cost
-    from .models import AggregationMLP, VGAIController, VGAIModel, VisualCNN
-
     cfg, tcfg = FlockConfig(), VGAITrainConfig()
     gen = torch.Generator().manual_seed(0)
     r0, v0 = sample_initial_state(cfg, episodes, gen)
     start = time.perf_counter()
-    r, v, u = collect_episodes(None, cfg, r0, v0, 0.0, gen)
+    store = EpisodeStore()
+    store.fly(None, cfg, r0, v0, 0.0, gen)
+    r, v, u = store.tensors()
     collect_expert = (time.perf_counter() - start) / episodes
-    C, H, W = tcfg.vision.image_shape(cfg)
-    model = VGAIModel(VisualCNN(C, H, W, tcfg.F, tcfg.cnn_widths, tcfg.cnn_hidden),
-                      AggregationMLP(tcfg.K, tcfg.F, tcfg.hidden))
+    model = tcfg.new_model()
     start = time.perf_counter()
     fit_state_estimator(model.cnn, tcfg.vision, cfg, r, v, steps, tcfg.warm_states, tcfg, gen, progress=False)
     stage1 = (time.perf_counter() - start) / steps
@@ -125,7 +124,7 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     model.train()
     start = time.perf_counter()
     for _ in range(steps):
-        loss = window_loss(model, tcfg.vision, cfg, tcfg, r, v, u, gen)
+        loss = bptt_loss(model, cfg, tcfg, r, v, u, gen)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
@@ -158,8 +157,6 @@ def main(args=None) -> None:
     for row in rows:
         print(f"{row['impl']:32s} {row['batch']:6d} {row['N']:4d} {row['agent_steps_per_s']:15,.0f} "
               f"{row['speedup_vs_baseline']:11.1f}x")
-    from .render import RenderConfig
-
     rc = RenderConfig()
     print(f"\nrenderers, 64 swarms x 50 agents, panorama {rc.view_height} x {rc.panorama_width} "
           f"(4 cameras of {rc.view_height} x {rc.view_width}), {len(rc.channels)} channels; "

@@ -1,37 +1,55 @@
-"""Saving and loading learned controllers: one file holds the config, the architecture and the weights.
+"""The book's files: learned controllers, stand-alone state estimators, and the cache of VGAI's
+first training stage. One file holds the configuration, the architecture and the weights.
 
-Introduced in notebook 03. Files are written with ``torch.save`` and read with
+Introduced in notebook 03. Files are written atomically (a temporary file renamed into place, so an
+interrupted run never leaves half a file) with ``torch.save`` and read with
 ``torch.load(..., weights_only=True)``: only tensors and plain values, so loading never runs code.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from pathlib import Path
 from typing import Optional, Union
 
 import torch
 
 from .config import FlockConfig
+from .learned_controllers import DAGNNController, VGAIController
+from .models import AggregationMLP, VGAIModel, VisualCNN
+from .vision import VisionConfig
 
 FORMAT = "vgai-lite-controller/1"
+ESTIMATOR_FORMAT = "vgai-lite-estimator/1"
+STAGE1_FORMAT = "vgai-lite-stage1/2"
+
+
+def config_hash(obj) -> str:
+    """12 hex digits identifying a JSON-able object (keys sorted): names cache files and table cells."""
+    return hashlib.sha1(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
+def atomic_save(payload: dict, path: Union[str, Path]) -> Path:
+    """``torch.save`` to a temporary file beside ``path``, then rename it into place."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    torch.save(payload, tmp)
+    tmp.replace(path)
+    return path
+
+
+def _weights(module: torch.nn.Module) -> dict:
+    return {k: t.detach().cpu() for k, t in module.state_dict().items()}
 
 
 def save_controller(path: Union[str, Path], controller, meta: Optional[dict] = None) -> Path:
     """Write ``controller`` (it must have ``spec()``, ``model`` and ``cfg``) and ``meta`` to ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    payload = {
-        "format": FORMAT,
-        "spec": controller.spec(),
-        "config": dataclasses.asdict(controller.cfg),
-        "state_dict": {k: v.detach().cpu() for k, v in controller.model.state_dict().items()},
-        "meta": meta or {},
-    }
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    torch.save(payload, tmp)
-    tmp.replace(path)  # never leave a half-written checkpoint behind
-    return path
+    payload = {"format": FORMAT, "spec": controller.spec(), "config": dataclasses.asdict(controller.cfg),
+               "state_dict": _weights(controller.model), "meta": meta or {}}
+    return atomic_save(payload, path)
 
 
 def read_checkpoint(path: Union[str, Path]) -> dict:
@@ -39,7 +57,7 @@ def read_checkpoint(path: Union[str, Path]) -> dict:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no checkpoint at {path}: train one first (see notebook 03, "
-                                f"vgai_lite.imitation.load_or_train) or check the path")
+                                f"vgai_lite.load_or_train) or check the path")
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:
@@ -76,15 +94,11 @@ def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, d
     spec, stored_cfg = payload["spec"], FlockConfig(**payload["config"])
     kind = spec.get("kind")
     if kind == "dagnn":
-        from .models import AggregationMLP, DAGNNController
-
         model = AggregationMLP(spec["K"], spec["F"], spec["hidden"])
         _load_weights(model, payload["state_dict"], path)
         controller = DAGNNController(model.to(device).eval(), cfg or stored_cfg, spec["gso"],
                                      spec["feature_transform"])
     elif kind == "vgai":
-        from .models import AggregationMLP, VGAIController, VGAIModel, VisionConfig, VisualCNN
-
         c = spec["cnn"]
         cnn = VisualCNN(c["in_channels"], c["height"], c["width"], spec["F"], c["widths"], c["hidden"])
         model = VGAIModel(cnn, AggregationMLP(spec["K"], spec["F"], spec["hidden"]))
@@ -104,3 +118,54 @@ def _load_weights(model: torch.nn.Module, state_dict: dict, path) -> None:
     except RuntimeError as exc:
         raise ValueError(f"{path}: the stored weights do not match the stored architecture "
                          f"({str(exc).splitlines()[0]}); the file is inconsistent, train again") from exc
+
+
+# ---------------------------------------------------------------------------------------------
+# Stand-alone visual state estimators (notebook 05): a VisualCNN and what it is shown
+
+
+def save_estimator(path: Union[str, Path], cnn: VisualCNN, vision: VisionConfig, meta: dict) -> Path:
+    payload = {"format": ESTIMATOR_FORMAT, "vision": vision.to_dict(),
+               "cnn": {"in_channels": cnn.in_channels, "height": cnn.height, "width": cnn.width, "F": cnn.F,
+                       "widths": list(cnn.widths), "hidden": cnn.hidden},
+               "state_dict": _weights(cnn), "meta": meta}
+    return atomic_save(payload, path)
+
+
+def load_estimator(path: Union[str, Path]) -> tuple[VisualCNN, VisionConfig, dict]:
+    """(cnn, vision, meta) from an estimator file (weights_only: no code runs)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no estimator at {path}: run `python -m vgai_lite train-vgai --estimators`")
+    payload = torch.load(path, map_location="cpu", weights_only=True)
+    if not isinstance(payload, dict) or payload.get("format") != ESTIMATOR_FORMAT:
+        raise ValueError(f"{path} is not a vgai-lite state estimator (format {ESTIMATOR_FORMAT!r})")
+    c = payload["cnn"]
+    cnn = VisualCNN(c["in_channels"], c["height"], c["width"], c["F"], c["widths"], c["hidden"])
+    _load_weights(cnn, payload["state_dict"], path)
+    return cnn.eval(), VisionConfig.from_dict(payload["vision"]), payload["meta"]
+
+
+# ---------------------------------------------------------------------------------------------
+# The cache of VGAI's first training stage, keyed by what that stage depends on
+
+
+def stage1_file(folder: Union[str, Path], identity: dict, F: int) -> Path:
+    """Where the stage 1 with this ``identity`` (a JSON-able dict) is cached in ``folder``."""
+    return Path(folder) / f"stage1_F{F}_{config_hash({'format': STAGE1_FORMAT, **identity})}.pt"
+
+
+def save_stage1(path: Path, identity: dict, cnn: VisualCNN, generator: torch.Generator, record: dict) -> Path:
+    """The CNN at the end of stage 1, the sampling generator's state then, and ``record`` (plain values)."""
+    payload = {"identity_json": json.dumps({"format": STAGE1_FORMAT, **identity}, sort_keys=True),
+               "state_dict": _weights(cnn), "generator": generator.get_state(), "record": record}
+    return atomic_save(payload, path)
+
+
+def load_stage1(path: Path, cnn: VisualCNN, generator: torch.Generator) -> dict:
+    """Restore a cached stage 1 into ``cnn`` and ``generator``; returns its record."""
+    payload = torch.load(path, map_location="cpu", weights_only=True)
+    _load_weights(cnn, payload["state_dict"], path)
+    cnn.eval()
+    generator.set_state(payload["generator"])
+    return payload["record"]

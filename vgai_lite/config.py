@@ -102,4 +102,17 @@ class FlockConfig:
         return replace(self, **changes)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        return config_dict(self)
+
+
+def config_dict(config) -> dict:
+    """A config dataclass as plain JSON-ready values (nested configs as dicts, tuples as lists): the
+    form stored in checkpoints and hashed into cache keys. Every config's ``to_dict`` is this."""
+    def plain(x):
+        if isinstance(x, dict):
+            return {k: plain(v) for k, v in x.items()}
+        if isinstance(x, (list, tuple)):
+            return [plain(v) for v in x]
+        return x
+
+    return plain(asdict(config))

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Optional, Union
 
 import nbformat
+from nbclient import NotebookClient
 
 from .book import QUICK_ENV, ROOT
 from .exercises import EXERCISES, GRADE_FILE_ENV, exercises_of
@@ -37,7 +38,6 @@ from .exercises import EXERCISES, GRADE_FILE_ENV, exercises_of
 BEGIN = "### BEGIN SOLUTION"
 END = "### END SOLUTION"
 HINT = "# HINT:"
-_CHECK_CALL = re.compile(r"check_\w+\(")
 _EXERCISE_ID = re.compile(r"Exercise (\d\d\.\d+)")
 
 
@@ -145,8 +145,6 @@ def grade_notebook(path: Union[str, Path], out: Optional[Union[str, Path]] = Non
     book in quick mode (``VGAI_LITE_QUICK=1``). Writes the report to ``out`` (a .json file, or a
     folder that gets FOLDER__NAME.json, see ``report_name``) when given.
     """
-    from nbclient import NotebookClient
-
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no notebook at {path}")
@@ -159,18 +157,9 @@ def grade_notebook(path: Union[str, Path], out: Optional[Union[str, Path]] = Non
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         log = Path(tmp) / "checks.jsonl"
-        saved = {k: os.environ.get(k) for k in (QUICK_ENV, GRADE_FILE_ENV)}
-        os.environ[QUICK_ENV] = "1" if quick else "0"
-        os.environ[GRADE_FILE_ENV] = str(log)
-        try:
-            NotebookClient(nb, timeout=timeout, kernel_name="python3", allow_errors=True,
-                           resources={"metadata": {"path": str(path.parent.resolve())}}).execute()
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+        env = {**os.environ, QUICK_ENV: "1" if quick else "0", GRADE_FILE_ENV: str(log)}  # the kernel's only
+        NotebookClient(nb, timeout=timeout, kernel_name="python3", allow_errors=True,
+                       resources={"metadata": {"path": str(path.parent.resolve())}}).execute(env=env)
         records = [json.loads(l) for l in log.read_text().splitlines()] if log.is_file() else []
     last = {r["exercise"]: r for r in records}
     exercises = {}

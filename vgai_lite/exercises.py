@@ -9,6 +9,7 @@ answer gives a message, not a broken notebook.
 from __future__ import annotations
 
 import json
+import math
 import os
 import traceback
 from dataclasses import dataclass
@@ -16,9 +17,13 @@ from typing import Callable
 
 import torch
 
+from .aggregation import aggregation_sequence
 from .config import FlockConfig
 from .controllers import potential_gradient
+from .features import local_features
 from .flocking import flocking_cost
+from .graphs import adjacency, gso
+from .render import RenderConfig, bearing_to_column
 
 
 @dataclass
@@ -185,9 +190,6 @@ def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
     X (T, N, F) features and S (T, N, N) GSOs at times 0 ... T-1 of one swarm (nothing before 0);
     return Z(T-1) of shape (N, K, F): block k = S(t) S(t-1) ... S(t-k+1) X(t-k) (eq. 6).
     """
-    from .aggregation import aggregation_sequence
-    from .graphs import adjacency, gso
-
     def body():
         g = _fresh_generator()
         T, N, F = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(8, 15, (1,), generator=g)), 3
@@ -220,8 +222,6 @@ def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
 def check_local_features(student_fn: Callable) -> CheckResult:
     """Exercise 03.1: ``student_fn(r, v, R) -> X`` with r, v (N, 2): the 6 local features (N, 6),
     ordered [sum (v_i - v_j), sum r_ij/|r_ij|^4, sum r_ij/|r_ij|^2] over neighbours within R."""
-    from .features import local_features
-
     def body():
         g = _fresh_generator()
         N = int(torch.randint(5, 20, (1,), generator=g))
@@ -250,10 +250,6 @@ def check_pinhole(student_fn: Callable) -> CheckResult:
     """Exercise 04.1: ``student_fn(theta, d, rcfg) -> (u, height)`` for a drone at bearing ``theta``
     (radians, CCW from +x) and centre distance ``d`` (m): the continuous panorama column u of its
     bearing and its apparent height in rows, 2 f_v (h/2) / (d - body_radius)."""
-    import math
-
-    from .render import RenderConfig, bearing_to_column
-
     def body():
         g = _fresh_generator()
         rcfg = RenderConfig(view_width=int(torch.randint(8, 64, (1,), generator=g)) * 2,

@@ -27,11 +27,6 @@ def adjacency(r: torch.Tensor, R: float) -> torch.Tensor:
     return (d2 <= R * R).to(r.dtype)
 
 
-def degree(A: torch.Tensor) -> torch.Tensor:
-    """Number of neighbours of each agent, (B, N, N) -> (B, N)."""
-    return A.sum(dim=-1)
-
-
 def gso(A: torch.Tensor, kind: str = DEFAULT_GSO) -> torch.Tensor:
     """A graph shift operator built from the binary adjacency A, (B, N, N) -> (B, N, N).
 

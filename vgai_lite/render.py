@@ -35,6 +35,12 @@ from .flocking import check_state
 CHANNELS = ("gray", "depth")
 CAMERAS = ("front", "right", "back", "left")
 
+# Grey levels of the "gray" channel (a camera-like intensity in [0, 1]; our choice, none in the paper):
+SKY_GRAY, SKY_GRADIENT = 0.85, 0.1          # sky at the horizon, and its darkening toward the top
+GROUND_GRAY, GROUND_GRADIENT = 0.55, -0.25  # ground at the horizon, and its darkening toward the bottom
+HORIZON_GRAY = 0.7                          # a body far away fades to this (fog)
+BODY_GRAY = 0.1                             # a body close up
+
 
 @dataclass(frozen=True)
 class RenderConfig:
@@ -183,7 +189,6 @@ def column_layers(r: torch.Tensor, rcfg: RenderConfig) -> ColumnLayers:
     depth = torch.where(cover > 0, depth, torch.inf)  # a column the body does not touch: ignore
     hits = (across.abs() <= rho_b) & (cover > 0)
     flat = (base + col).long()
-    pair_k = pair
     size = B * N * Wt
     inf = torch.full((size,), math.inf, dtype=dt, device=dev)
     d1 = inf.scatter_reduce(0, flat, depth, "amin")
@@ -191,8 +196,8 @@ def column_layers(r: torch.Tensor, rcfg: RenderConfig) -> ColumnLayers:
     c1 = torch.zeros(size, dtype=dt, device=dev).scatter_reduce(0, flat[first], cover[first], "amax")
     # the second layer: the nearest body that is not the first one
     p1 = torch.full((size,), -1, dtype=torch.long, device=dev).scatter_reduce(
-        0, flat[first], pair_k[first], "amax")
-    rest = pair_k != p1[flat]
+        0, flat[first], pair[first], "amax")
+    rest = pair != p1[flat]
     d2 = inf.scatter_reduce(0, flat[rest], depth[rest], "amin")
     second = rest & (depth <= d2[flat])
     c2 = torch.zeros(size, dtype=dt, device=dev).scatter_reduce(0, flat[second], cover[second], "amax")
@@ -210,7 +215,7 @@ def egocentric_depth(r: torch.Tensor, rcfg: RenderConfig = RenderConfig()) -> to
 def _background(rows: torch.Tensor, H: int) -> torch.Tensor:
     """Sky above the horizon (bright, darker upward), ground below (darker toward the bottom)."""
     y = (rows + 0.5 - H / 2) / (H / 2)  # -1 at the top, +1 at the bottom
-    return torch.where(y < 0, 0.85 + 0.1 * y, 0.55 - 0.25 * y)
+    return torch.where(y < 0, SKY_GRAY + SKY_GRADIENT * y, GROUND_GRAY + GROUND_GRADIENT * y)
 
 
 def render_egocentric(r: torch.Tensor, cfg: FlockConfig, rcfg: RenderConfig = RenderConfig()) -> torch.Tensor:
@@ -237,11 +242,9 @@ def render_egocentric(r: torch.Tensor, cfg: FlockConfig, rcfg: RenderConfig = Re
     for c, ch in enumerate(rcfg.channels):
         if ch == "gray":
             bg = _background(rows, H)[:, None].expand(H, Wt)
-            horizon = 0.7
-
             def value(depth):  # dark bodies fading to the horizon's colour with distance
                 fog = torch.exp(-depth / rcfg.fog_distance)
-                return (horizon + (0.1 - horizon) * fog).unsqueeze(2)
+                return (HORIZON_GRAY + (BODY_GRAY - HORIZON_GRAY) * fog).unsqueeze(2)
         else:
             bg = torch.zeros((), dtype=dt, device=dev).expand(H, Wt)
 
@@ -298,7 +301,7 @@ def render_topdown(r: torch.Tensor, cfg: FlockConfig, rcfg: RenderConfig = Rende
 # Motion
 
 def with_motion(current: torch.Tensor, earlier: torch.Tensor, mode: str = "difference",
-                scale: float = 5.0) -> torch.Tensor:
+                scale: float = 1.0) -> torch.Tensor:
     """Give a single-frame image motion: stack it with an earlier frame (g steps before).
 
     mode "stack": [I(t), I(t-g)] along channels; "difference": [I(t), scale (I(t) - I(t-g))].

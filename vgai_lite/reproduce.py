@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import hashlib
+import importlib.metadata as md
 import json
 import platform
 import subprocess
@@ -43,35 +43,11 @@ import torch
 from tqdm.auto import tqdm
 
 from .book import DATA_DIR, EVAL_SEED, ROOT
-from .bptt import VGAI_RUNS, VGAITrainConfig, load_or_train_vgai
 from .config import FlockConfig
-from .imitation import BOOK_RUNS, DAGNNTrainConfig, load_or_train
-
-PAPER: dict[str, dict] = {
-    "F": {"DAGNN": {6: 1.70}, "VGAI": {6: 2.37, 12: 2.38, 24: 2.26}},
-    "K": {"DAGNN": {1: 1.94, 2: 1.82, 3: 1.70}, "VGAI": {1: 2.48, 2: 2.29, 3: 2.26}},
-    "v_init": {"DAGNN": {1: 1.58, 2: 1.63, 3: 1.70}, "Local": {1: 3.63, 2: 3.77, 3: 4.13},
-               "VGAI": {1: 1.97, 2: 2.10, 3: 2.26}},
-    "R": {"DAGNN": {1.0: 1.95, 1.5: 1.70, 2.0: 1.59}, "Local": {1.0: 4.85, 1.5: 4.13, 2.0: 2.75},
-          "VGAI": {1.0: 2.65, 1.5: 2.26, 2.0: 1.77}},
-    "N": {"VGAI": {50: 1.70, 60: 2.14, 75: 2.23}},
-}
-"""The paper's numbers (Tables 1-3), by table, row and column. Typed from the paper's source
-(../shared/paper/vgai-corl2020.tex, section 4); they are the only hand-typed numbers of the book."""
-
-TABLES: dict[str, dict] = {
-    "F": {"title": "Table 1a: feature dimension F (K - 1 = 3)", "column": "F", "columns": [6, 12, 24],
-          "rows": ["DAGNN", "VGAI"]},
-    "K": {"title": "Table 1b: number of exchanges K - 1 (F = 24)", "column": "K - 1", "columns": [1, 2, 3],
-          "rows": ["DAGNN", "VGAI"]},
-    "v_init": {"title": "Table 2a: initial velocity v_init [m/s]", "column": "v_init", "columns": [1.0, 2.0, 3.0],
-               "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"]},
-    "R": {"title": "Table 2b: communication radius R [m]", "column": "R", "columns": [1.0, 1.5, 2.0],
-          "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"], "extra_rows": ["VGAI (retrained)"]},
-    "N": {"title": "Table 3: trained on N = 50, flown by N' agents", "column": "N'",
-          "columns": [50, 60, 75, 100, 200], "rows": ["DAGNN", "Local", "VGAI"]},
-}
-
+from .dagnn_training import DAGNNTrainConfig
+from .paper import PAPER, TABLES
+from .table_cells import ModelSpec, evaluate_cell, model_path
+from .vgai_training import VGAITrainConfig
 
 @dataclass(frozen=True)
 class ReproduceConfig:
@@ -125,27 +101,6 @@ def _quick_vgai(t: VGAITrainConfig) -> VGAITrainConfig:
 
 # ---------------------------------------------------------------------------------------------
 # Models
-
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """A trained controller: kind ("dagnn", "vgai" or "local"), training configuration and name."""
-
-    kind: str
-    cfg: FlockConfig
-    tcfg: Optional[object] = None
-    name: str = ""
-
-    def identity(self) -> dict:
-        return {"kind": self.kind, "config": self.cfg.to_dict(),
-                "train_config": self.tcfg.to_dict() if self.tcfg is not None else None}
-
-    def key(self) -> str:
-        return _hash(self.identity())
-
-
-def _hash(obj) -> str:
-    return hashlib.sha1(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:12]
 
 
 def _base_cfg(rc: ReproduceConfig, **changes) -> FlockConfig:
@@ -216,89 +171,6 @@ def episodes_of(rc: ReproduceConfig, cfg: FlockConfig) -> int:
     return min(n, 2) if rc.quick else n
 
 
-def _shipped_path(spec: ModelSpec) -> Optional[Path]:
-    """The book's checkpoint for ``spec`` when it ships one with exactly this configuration."""
-    if spec.cfg != FlockConfig():
-        return None
-    runs, folder = (BOOK_RUNS, "dagnn") if spec.kind == "dagnn" else (VGAI_RUNS, "vgai")
-    for name, t in runs.items():
-        if t == spec.tcfg:
-            return DATA_DIR / folder / f"{name}.pt"
-    return None
-
-
-def model_path(spec: ModelSpec, out: Path) -> Path:
-    return _shipped_path(spec) or out / "models" / f"{spec.name}_{spec.key()}.pt"
-
-
-def obtain(spec: ModelSpec, out: Path, progress: bool = False,
-           retrain: bool = False) -> tuple[Optional[Path], float, bool]:
-    """Make sure ``spec`` has a finished checkpoint (train and save it now if none of the same
-    configuration exists, or if ``retrain``). Returns (its path, None for the local heuristic;
-    seconds spent; whether it was trained now). VGAI runs share their stage 1 through ``OUT/stage1/``."""
-    from .checkpoints import is_finished_with
-
-    if spec.kind == "local":
-        return None, 0.0, False
-    path = model_path(spec, out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
-    start = time.perf_counter()
-    if trained:  # otherwise the checkpoint is ready; evaluate_cell loads it in the flight configuration
-        if spec.kind == "dagnn":
-            load_or_train(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress)
-        else:
-            load_or_train_vgai(path, spec.cfg, spec.tcfg, retrain=retrain, progress=progress,
-                               stage1_cache=out / "stage1")
-    return path, time.perf_counter() - start, trained
-
-
-# ---------------------------------------------------------------------------------------------
-# Cells
-
-
-def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int, out: Path,
-                  progress: bool = False, retrain: bool = False, fresh: bool = False) -> dict:
-    """Fly the controller of ``spec`` in ``flight`` (episodes from ``seed``) and record its figures;
-    read from OUT/cells/ if this exact cell was computed before, unless ``fresh``. ``retrain``:
-    train the controller anew first."""
-    from .checkpoints import load_controller
-    from .controllers import LocalController
-    from .evaluate import relative_cost
-
-    ident = {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
-    key = _hash(ident)
-    path = out / "cells" / f"{key}.json"
-    if path.is_file() and not fresh:
-        return {**json.loads(path.read_text()), "computed_now": False}
-    ckpt, train_seconds, trained = obtain(spec, out, progress, retrain=retrain)
-    # fly it in this column's configuration (trained in spec.cfg)
-    controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
-    start = time.perf_counter()
-    res = relative_cost(controller, flight, episodes=episodes, seed=seed, name=spec.name)
-    record = {"key": key, **ident, "name": spec.name, **res.summary(),
-              "min_distance": round(float(res.safety.min_distance.min()), 4),
-              "expert_min_distance": round(float(res.expert_safety.min_distance.min()), 4),
-              "eval_seconds": round(time.perf_counter() - start, 1),
-              "train_seconds_now": round(train_seconds, 1) if trained else 0.0,
-              "trained_now": trained,
-              "checkpoint": (str(Path(ckpt).resolve().relative_to(ROOT.resolve()))
-                             if ckpt is not None and _inside(ckpt, ROOT) else (str(ckpt) if ckpt else None))}
-    if spec.kind != "local":
-        record["train_seconds_recorded"] = round(controller.meta.get("history", {}).get("seconds", 0.0), 1)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(record, indent=1) + "\n")
-    return {**record, "computed_now": True}
-
-
-def _inside(path, root) -> bool:
-    try:
-        Path(path).resolve().relative_to(Path(root).resolve())
-        return True
-    except ValueError:
-        return False
-
-
 def plan(rc: ReproduceConfig, tables: list[str]) -> list[tuple]:
     """Every (table, row, column, spec, flight, episodes) of the run, in order."""
     jobs = []
@@ -336,8 +208,6 @@ def _cost_estimate(spec: ModelSpec, flight: FlockConfig, episodes: int, out: Pat
 
 
 def provenance(rc: ReproduceConfig, seconds: float, started: str) -> dict:
-    import importlib.metadata as md
-
     def version(p):
         try:
             return md.version(p)
@@ -374,6 +244,33 @@ def _aggregate(records: list[dict]) -> dict:
            "expert_share_below_0.05m": first["expert_share_below_0.05m"],
            "cells": [r["key"] for r in records]}
     return out
+
+
+def _tables(rc: ReproduceConfig, tables: list[str], records: dict) -> tuple[dict, list]:
+    """Every table's cells (aggregated over training seeds, the paper's number beside) and the CSV rows."""
+    out = {}
+    rows_csv = []
+    for table in tables:
+        t = TABLES[table]
+        entry = {"title": t["title"], "column": t["column"], "columns": t["columns"], "rows": {}}
+        for row in rows_of(rc, table):
+            cells = {}
+            for column in t["columns"]:
+                if (table, row, column) not in records:
+                    continue
+                agg = _aggregate(records[(table, row, column)])
+                agg["paper"] = PAPER.get(table, {}).get(row, {}).get(column)
+                cells[str(column)] = agg
+                rows_csv.append({"table": table, "row": row, "column": t["column"], "value": column,
+                                 "relative_cost_mean": agg["relative_cost_mean"],
+                                 "ci95_low": (agg["ci95"] or [None, None])[0],
+                                 "ci95_high": (agg["ci95"] or [None, None])[1],
+                                 "seed_std": agg["seed_std"], "seeds": len(agg["per_seed"]),
+                                 "episodes": agg["episodes"], "min_distance": agg["min_distance"],
+                                 "share_below_0.05m": agg["share_below_0.05m"], "paper": agg["paper"]})
+            entry["rows"][row] = cells
+        out[table] = entry
+    return out, rows_csv
 
 
 def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfig(),
@@ -431,27 +328,7 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
                                    "cells_computed_now": p["compute_seconds"]["cells_computed_now"],
                                    "models_trained_now": sum(1 for r in every if r["computed_now"]
                                                              and r.get("trained_now"))}]
-    rows_csv = []
-    for table in tables:
-        t = TABLES[table]
-        entry = {"title": t["title"], "column": t["column"], "columns": t["columns"], "rows": {}}
-        for row in rows_of(rc, table):
-            cells = {}
-            for column in t["columns"]:
-                if (table, row, column) not in records:
-                    continue
-                agg = _aggregate(records[(table, row, column)])
-                agg["paper"] = PAPER.get(table, {}).get(row, {}).get(column)
-                cells[str(column)] = agg
-                rows_csv.append({"table": table, "row": row, "column": t["column"], "value": column,
-                                 "relative_cost_mean": agg["relative_cost_mean"],
-                                 "ci95_low": (agg["ci95"] or [None, None])[0],
-                                 "ci95_high": (agg["ci95"] or [None, None])[1],
-                                 "seed_std": agg["seed_std"], "seeds": len(agg["per_seed"]),
-                                 "episodes": agg["episodes"], "min_distance": agg["min_distance"],
-                                 "share_below_0.05m": agg["share_below_0.05m"], "paper": agg["paper"]})
-            entry["rows"][row] = cells
-        results["tables"][table] = entry
+    results["tables"], rows_csv = _tables(rc, tables, records)
     (out / "results.json").write_text(json.dumps(results, indent=1) + "\n")
     with open(out / "results.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows_csv[0]))

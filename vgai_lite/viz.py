@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Mapping, Optional
 
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 import torch
@@ -16,6 +17,7 @@ from matplotlib.collections import LineCollection
 
 from .config import FlockConfig
 from .flocking import Trajectory
+from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
 
 
 def _np(x: torch.Tensor) -> np.ndarray:
@@ -129,8 +131,6 @@ def animate_swarms(trajectories: Mapping[str, Trajectory], cfg: FlockConfig, b: 
 
 def animation_html(anim: animation.FuncAnimation, frame_format: str = "jpeg", loop: bool = True) -> str:
     """An animation as self-contained HTML with play controls (JPEG frames keep notebooks small)."""
-    import matplotlib
-
     with matplotlib.rc_context({"animation.frame_format": frame_format}):
         return anim.to_jshtml(default_mode="loop" if loop else "once")
 
@@ -141,8 +141,6 @@ def animate_views(traj: Trajectory, cfg: FlockConfig, rcfg=None, agent: int = 0,
 
     Returns a FuncAnimation (show it with ``animation_html``). Views are rendered per frame.
     """
-    from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
-
     rcfg = rcfg or RenderConfig()
     r = traj.r[:, b : b + 1]  # (T, 1, N, 2)
     frames = list(range(0, r.shape[0], every))

@@ -36,6 +36,7 @@ from IPython.display import HTML, Markdown, display
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
 from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.paper import PAPER
 from vgai_lite.viz import (animate_swarms, animation_html, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
 
@@ -307,7 +308,8 @@ ratio = (res_local.cost / res_local.expert_cost).numpy()
 fig, axes = plt.subplots(1, 2, figsize=(12, 3.8))
 axes[0].hist(ratio, bins=20, color="tab:orange")
 axes[0].axvline(res_local.mean_ratio, color="k", label=f"ours, mean ratio {res_local.mean_ratio:.2f}")
-axes[0].axvline(4.13, color="tab:red", ls="--", label="paper: 4.13")
+paper_local = PAPER["R"]["Local"][1.5]  # the paper's Local at the defaults (R = 1.5 m, v_init = 3 m/s)
+axes[0].axvline(paper_local, color="tab:red", ls="--", label=f"paper: {paper_local:.2f}")
 axes[0].set_xlabel("per-episode cost ratio Local / Centralized"), axes[0].legend()
 bins = np.linspace(0, 0.3, 31)
 axes[1].hist(res_local.expert_safety.min_distance.numpy(), bins=bins, alpha=0.6, label="Centralized")

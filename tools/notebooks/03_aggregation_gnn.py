@@ -33,8 +33,12 @@ from vgai_lite import (ExpertController, FlockConfig, LocalController, relative_
                        sample_initial_state)
 from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick
 from vgai_lite.features import FEATURE_NAMES, local_features
-from vgai_lite.imitation import BOOK_RUNS, DAGNNTrainConfig, load_or_train, train_dagnn
-from vgai_lite.models import AggregationMLP, DAGNNController
+from vgai_lite.dagnn_training import DAGNNTrainConfig, train_dagnn
+from vgai_lite.imitation import load_or_train
+from vgai_lite.learned_controllers import DAGNNController
+from vgai_lite.models import AggregationMLP
+from vgai_lite.paper import PAPER
+from vgai_lite.runs import DAGNN_RUNS
 
 torch.set_num_threads(2)
 cfg = FlockConfig()
@@ -114,12 +118,12 @@ print(f"mean |u*| over steps 0-19: {u_norm[:20].mean():.1f} m/s²; over steps 10
 # *learner's* action instead of the expert's with probability 0.33 at every step (the paper's
 # value), every visited state is labelled with the expert's action, and the datasets of all rounds
 # are aggregated. Round 0 follows the expert only (the learner knows nothing yet). The code, from
-# `vgai_lite/imitation.py`:
+# `vgai_lite/imitation.py` (`dagger_mix`, the rule exercise 06.1 asks for, and `fly_dagger`):
 #
 # ```python
-# follow = torch.rand(B, generator=generator) < p_learner          # one coin per swarm and step
-# u = torch.where(follow[:, None, None], learner.act(Z), u_star)   # ... the action applied
-# Us.append(u_star[rows])                                           # ... the expert's label stored
+# follow = torch.rand(B, generator=generator) < p                 # one coin per swarm and step
+# u = torch.where(follow[:, None, None], u_learner, u_expert)     # ... the action applied
+# record(t, r, v, u_star, Z)                                      # ... the expert's label stored
 # ```
 #
 # Everything else the paper leaves open is in one object, with our choices (a few minutes of CPU):
@@ -143,7 +147,7 @@ if QUICK:
     print("miniature run, validation relative cost by round:",
           [round(r["val_relative_cost"], 2) for r in tiny_hist["rounds"]])
 
-dagnn = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg, BOOK_RUNS["dagnn_K4"])
+dagnn, _ = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg, DAGNN_RUNS["dagnn_K4"], train_dagnn)
 hist = dagnn.meta["history"]
 print(f"dagnn_K4: trained in {hist['seconds']:.0f} s, {hist['rounds'][-1]['rows']:,} agent-steps in the final dataset")
 
@@ -177,15 +181,16 @@ print("validation relative cost by round:", [round(r["val_relative_cost"], 2) fo
 
 # %%
 t0 = time.perf_counter()
-signed_log = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4_signed_log.pt", cfg, BOOK_RUNS["dagnn_K4_signed_log"],
-                           progress=False)
+signed_log, _ = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4_signed_log.pt", cfg,
+                              DAGNN_RUNS["dagnn_K4_signed_log"], train_dagnn, progress=False)
 results = {"DAGNN": relative_cost(dagnn, cfg, episodes=EPISODES, seed=EVAL_SEED),
            "DAGNN, signed-log features": relative_cost(signed_log, cfg, episodes=EPISODES, seed=EVAL_SEED),
            "Local": relative_cost(LocalController(cfg), cfg, episodes=EPISODES, seed=EVAL_SEED)}
 print(f"({time.perf_counter() - t0:.1f} s)")
-paper = {"Centralized": 1.00, "DAGNN": 1.70, "Local": 4.13, "DAGNN, signed-log features": "—"}
+paper = {"Centralized": "1.00", "DAGNN": f"{PAPER['R']['DAGNN'][1.5]:.2f}", "Local": f"{PAPER['R']['Local'][1.5]:.2f}",
+         "DAGNN, signed-log features": "—"}  # the paper's numbers at the defaults (R = 1.5 m)
 exp = results["DAGNN"].expert_safety
-rows = [f"| Centralized | 1.00 | 1.00 | {paper['Centralized']:.2f} | {exp.median_min_distance:.3f} | {exp.share_below(0.05):.0%} | {exp.share_below(0.1):.0%} |"]
+rows = [f"| Centralized | 1.00 | 1.00 | {paper['Centralized']} | {exp.median_min_distance:.3f} | {exp.share_below(0.05):.0%} | {exp.share_below(0.1):.0%} |"]
 for name, res in results.items():
     lo, hi = res.mean_ratio_ci
     rows.append(f"| {name} | **{res.mean_ratio:.2f}** ({lo:.2f}-{hi:.2f}) | {res.median_ratio:.2f} | {paper[name]} | "
@@ -226,7 +231,7 @@ plt.show()
 
 # %%
 def book_dagnn(name):
-    return load_or_train(DATA_DIR / "dagnn" / f"{name}.pt", cfg, BOOK_RUNS[name], progress=False)
+    return load_or_train(DATA_DIR / "dagnn" / f"{name}.pt", cfg, DAGNN_RUNS[name], train_dagnn, progress=False)[0]
 
 
 rows = []

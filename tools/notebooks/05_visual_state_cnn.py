@@ -28,9 +28,11 @@ from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
 from vgai_lite.book import EVAL_SEED, QUICK, pick
-from vgai_lite.bptt import _images, book_estimator, estimator_quality, train_state_estimator
 from vgai_lite.features import FEATURE_NAMES, local_features
-from vgai_lite.models import VisionConfig, VisualCNN
+from vgai_lite.models import VisualCNN
+from vgai_lite.runs import book_estimator
+from vgai_lite.vgai_training import estimator_quality, train_state_estimator
+from vgai_lite.vision import VisionConfig, stored_images
 
 torch.set_num_threads(2)
 cfg, vision = FlockConfig(), VisionConfig()
@@ -50,7 +52,7 @@ print(vision)
 r0, v0 = sample_initial_state(cfg, pick(8, 2), torch.Generator().manual_seed(EVAL_SEED))
 traj = rollout(ExpertController(cfg), cfg, r0, v0)
 t = 10
-img = _images(vision, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))  # (B, N, 4, 12, 128)
+img = stored_images(vision, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))  # (B, N, 4, 12, 128)
 print("CNN input of one swarm at t = 10:", tuple(img[0].shape), "(N, C, H, W)")
 fig, axes = plt.subplots(4, 1, figsize=(12, 4.2))
 for k, (ax, title) in enumerate(zip(axes, ("gray I(t)", "depth I(t)", "5 (gray difference)", "5 (depth difference)"))):
@@ -74,7 +76,7 @@ plt.show()
 # column $k$".
 
 # %%
-C, H, W = vision.image_shape(cfg)
+C, H, W = vision.image_shape()
 cnn = VisualCNN(C, H, W, F=24)
 print(cnn)
 n_params = sum(p.numel() for p in cnn.parameters() if p.requires_grad)
@@ -155,7 +157,7 @@ display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|-
 # %%
 est, vis, _ = estimators["two frames (g = 5)"]
 t = 20
-imgs = _images(vis, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))
+imgs = stored_images(vis, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))
 with torch.no_grad():
     pred = est.estimate_local_features(imgs.flatten(0, 1))
 exact = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)

@@ -31,8 +31,11 @@ from IPython.display import HTML, Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick
-from vgai_lite.bptt import VGAITrainConfig, book_vgai, train_vgai
-from vgai_lite.imitation import BOOK_RUNS, load_or_train
+from vgai_lite.dagnn_training import train_dagnn
+from vgai_lite.imitation import load_or_train
+from vgai_lite.paper import PAPER
+from vgai_lite.runs import DAGNN_RUNS, book_vgai
+from vgai_lite.vgai_training import VGAITrainConfig, train_vgai
 
 cfg = FlockConfig()
 EPISODES = pick(50, 3)
@@ -50,15 +53,15 @@ print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} held
 # 4. run the MLP once, on $\mathbf Z(t)$, and take the L1 loss against the expert's $\mathbf U^*(t)$;
 # 5. backpropagate: through the MLP once and through the CNN $K$ times.
 #
-# From `vgai_lite/bptt.py`:
+# From `bptt_loss` in `vgai_lite/vgai_training.py` (`M` windows; `tau_c`, `ee`: the window's steps and
+# episodes; `stored_images` is the very pipeline the controller flies with, `vision.camera_input`):
 #
 # ```python
-# img = _images(vision, cfg, r, v, ee.flatten(), tau_c.flatten())    # K steps x N agents
-# Xw = cnn(img.flatten(0, 1)).view(windows, K, N, F) * valid         # nothing before t = 0
-# Sw = gso(adjacency(r[tau_c, ee], R)).view(windows, K, N, N) * valid
-# Zw = aggregation_sequence(Xw, Sw, K)[:, -1]                        # Z(t) at the window's end
-# loss = l1_loss(model.mlp(Zw), u_star[t_end, e])
-# loss.backward()                                                     # K-step BPTT
+# X = model.features(stored_images(vision, cfg, r, v, ee, tau_c)).view(M, K, N, F) * valid  # none before t = 0
+# S = gso(adjacency(r[tau_c, ee], R), gso_kind).view(M, K, N, N) * valid
+# Z = aggregation_sequence(X, S, K)[:, -1]             # Z(t) at the window's last step
+# loss = l1_loss(model.mlp(Z), u_star[t_end, e])
+# loss.backward()                                      # K-step BPTT
 # ```
 #
 # ## 2. Training in three stages
@@ -82,8 +85,8 @@ print(VGAITrainConfig())
 
 # %%
 if QUICK:
-    from vgai_lite.models import VisionConfig
     from vgai_lite.render import RenderConfig
+    from vgai_lite.vision import VisionConfig
 
     tiny = VGAITrainConfig(F=6, K=2, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8,
                            vision=VisionConfig(render=RenderConfig(view_height=8, view_width=16)),
@@ -117,11 +120,11 @@ plt.show()
 # On the same held-out initial conditions as every table in the book:
 
 # %%
-dagnn = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg, BOOK_RUNS["dagnn_K4"], progress=False)
+dagnn, _ = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg, DAGNN_RUNS["dagnn_K4"], train_dagnn, progress=False)
 results = {"DAGNN": relative_cost(dagnn, cfg, episodes=EPISODES, seed=EVAL_SEED),
            "VGAI": vgai_result,
            "Local": relative_cost(LocalController(cfg), cfg, episodes=EPISODES, seed=EVAL_SEED)}
-paper = {"DAGNN": 1.70, "VGAI": 2.26, "Local": 4.13}
+paper = {name: PAPER["R"][name][1.5] for name in ("DAGNN", "VGAI", "Local")}  # the paper's, at the defaults
 exp = results["DAGNN"].expert_safety
 rows = [f"| Centralized | 1.00 | 1.00 | {exp.median_min_distance:.3f} | {exp.share_below(0.05):.0%} | {exp.share_below(0.1):.0%} |"]
 for name, res in results.items():
@@ -153,7 +156,7 @@ display(Markdown("| controller (F = 24 for VGAI, K-1 = 3) | relative cost (95% C
 # which writes the records read here (`data/vgai/vgai_F*.json`):
 
 # %%
-paper_F = {6: 2.37, 12: 2.38, 24: 2.26}
+paper_F = PAPER["F"]["VGAI"]
 rows, recs = [], {}
 for F, p in paper_F.items():
     rec = recs[F] = json.loads((DATA_DIR / "vgai" / f"vgai_F{F}.json").read_text())

@@ -1,0 +1,111 @@
+"""The library's shape (issue 12): one idea per module, data flowing one way, the book's names at the
+top level, and the shipped results unchanged by the reorganisation."""
+
+import ast
+import importlib
+from pathlib import Path
+
+import pytest
+import torch
+
+import vgai_lite as vl
+from vgai_lite.book import DATA_DIR, EVAL_SEED
+from vgai_lite.exercises import check_dagger_mix
+
+PACKAGE = Path(vl.__file__).parent
+MODULES = sorted(p.stem for p in PACKAGE.glob("*.py") if p.stem not in ("__init__", "__main__"))
+CLI = {"__main__"}
+
+
+def _tree(name: str) -> ast.Module:
+    return ast.parse((PACKAGE / f"{name}.py").read_text())
+
+
+def _own_imports(node) -> set:
+    """The package's modules a node imports (``from .x import``, ``from . import x``)."""
+    out = set()
+    for n in ast.walk(node):
+        if isinstance(n, ast.ImportFrom) and n.level == 1:
+            out |= {n.module} if n.module else {a.name for a in n.names}
+    return out
+
+
+def test_results_of_the_shipped_controllers_are_the_ones_measured_before_the_refactor():
+    """Relative cost on the first 3 held-out episodes, measured with the pre-refactor library
+    (commit b429607): the DAGNN K-1 = 3 and the VGAI F = 24 fly exactly as they did."""
+    cfg = vl.FlockConfig()
+    before = {"dagnn/dagnn_K4": [37.43408203125, 38.06521987915039, 42.21247482299805],
+              "vgai/vgai_F24": [84.70115661621094, 79.35276794433594, 81.79953002929688]}
+    expert = [33.22722244262695, 33.17874526977539, 34.48318099975586]
+    for name, costs in before.items():
+        res = vl.relative_cost(vl.load_controller(DATA_DIR / f"{name}.pt"), cfg, episodes=3, seed=EVAL_SEED)
+        torch.testing.assert_close(res.cost, torch.tensor(costs), rtol=1e-5, atol=0)
+        torch.testing.assert_close(res.expert_cost, torch.tensor(expert), rtol=1e-6, atol=0)
+
+
+@pytest.mark.parametrize("path", sorted(DATA_DIR.glob("*/*.pt")), ids=lambda p: p.name)
+def test_every_shipped_file_loads(path):
+    if path.stem.startswith("estimator_"):
+        cnn, vision, meta = vl.load_estimator(path)
+        assert cnn.in_channels == vision.image_shape()[0]
+    else:
+        c = vl.load_controller(path)
+        assert c.meta["finished"]
+
+
+def test_the_names_the_notebooks_teach_are_at_the_top_level():
+    for name in ("load_controller", "render_egocentric", "render_topdown", "DAGNNController", "VGAIController",
+                 "gso", "adjacency", "AggregationBuffer", "aggregation_sequence", "local_features",
+                 "dagger_mix", "train_dagnn", "train_vgai", "bptt_loss", "load_or_train", "VisionConfig"):
+        assert name in vl.__all__ and callable(getattr(vl, name)), name
+
+
+def test_dagger_mix_is_the_solution_of_exercise_06_1():
+    assert check_dagger_mix(vl.dagger_mix).passed
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_modules_and_functions_stay_short(name):
+    text = (PACKAGE / f"{name}.py").read_text()
+    assert len(text.splitlines()) <= 400, f"{name}.py has {len(text.splitlines())} lines (at most 400)"
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            length = node.end_lineno - node.lineno + 1
+            assert length <= 80, f"{name}.{node.name} has {length} lines (at most 80)"
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_imports_of_the_package_sit_at_the_top_of_the_file(name):
+    """The import graph is the architecture: no arrow hidden inside a function (the CLI aside)."""
+    tree = _tree(name)
+    top = _own_imports(ast.Module(body=[n for n in tree.body if isinstance(n, ast.ImportFrom)], type_ignores=[]))
+    assert _own_imports(tree) == top, f"{name}.py imports {_own_imports(tree) - top} inside a function"
+
+
+def test_the_package_has_no_import_cycle():
+    graph = {name: _own_imports(_tree(name)) & set(MODULES) for name in MODULES}
+    done, path = set(), []
+
+    def visit(n):
+        assert n not in path, f"import cycle: {' -> '.join(path + [n])}"
+        if n in done:
+            return
+        path.append(n)
+        for m in graph[n]:
+            visit(m)
+        path.pop()
+        done.add(n)
+
+    for name in MODULES:
+        visit(name)
+        importlib.import_module(f"vgai_lite.{name}")
+
+
+def test_training_leaves_the_global_random_state_alone():
+    cfg = vl.FlockConfig(N=8, T=10)
+    tcfg = vl.DAGNNTrainConfig(K=2, hidden=(4,), rounds=1, episodes_per_round=1, epochs_per_round=1)
+    torch.manual_seed(123)
+    expected = torch.rand(3)
+    torch.manual_seed(123)
+    vl.train_dagnn(cfg, tcfg, progress=False, validation_episodes=1)
+    torch.testing.assert_close(torch.rand(3), expected)

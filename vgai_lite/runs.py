@@ -1,0 +1,121 @@
+"""The book's named runs: the DAGNNs, VGAIs and state estimators it ships in ``data/``, by name.
+
+Introduced in notebook 03 (DAGNN), 05 (estimators) and 06 (VGAI). ``book_dagnn``/``book_vgai``
+load a shipped controller when its configuration matches (``imitation.load_or_train``), train it
+otherwise, and evaluate it on the book's held-out episodes. One rule for the records beside the
+checkpoints (``data/*/NAME.json``): they are written when the model was trained now, or when the
+caller asks (the command line's ``train-dagnn`` and ``train-vgai`` do), so that a notebook run in
+quick mode never overwrites a shipped record.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Optional, Union
+
+from .book import DATA_DIR, EVAL_SEED
+from .checkpoints import load_estimator, save_estimator
+from .config import FlockConfig
+from .dagnn_training import DAGNNTrainConfig, train_dagnn
+from .evaluate import relative_cost
+from .imitation import load_or_train
+from .vgai_training import VGAITrainConfig, estimator_quality, train_state_estimator, train_vgai
+from .vision import VisionConfig
+
+DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
+    "dagnn_K4": DAGNNTrainConfig(),                          # the default: K - 1 = 3 exchanges
+    "dagnn_K3": DAGNNTrainConfig(K=3),                       # Table 1b: K - 1 = 2
+    "dagnn_K2": DAGNNTrainConfig(K=2),                       # Table 1b: K - 1 = 1
+    "dagnn_K1": DAGNNTrainConfig(K=1),                       # no exchange at all
+    "dagnn_K4_no_dagger": DAGNNTrainConfig(p_learner=0.0),   # behaviour cloning on expert data only
+    "dagnn_K4_mean": DAGNNTrainConfig(gso="row_normalized"), # GSO comparison (notebook 03)
+    "dagnn_K4_sum": DAGNNTrainConfig(gso="adjacency"),
+    "dagnn_K4_signed_log": DAGNNTrainConfig(feature_transform="signed_log"),
+}
+"""The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name."""
+
+VGAI_RUNS: dict[str, VGAITrainConfig] = {
+    "vgai_F24": VGAITrainConfig(),   # the paper's default: F = 24, K - 1 = 3, egocentric, two frames
+    "vgai_F6": VGAITrainConfig(F=6),     # Table 1a: as many features as the DAGNN's exact ones
+    "vgai_F12": VGAITrainConfig(F=12),   # Table 1a
+    "vgai_K2": VGAITrainConfig(K=2),     # Table 1b: K - 1 = 1 exchange
+    "vgai_K3": VGAITrainConfig(K=3),     # Table 1b: K - 1 = 2 exchanges
+}
+"""The VGAI controllers the book ships in data/vgai/, by name."""
+
+ESTIMATOR_RUNS: dict[str, VisionConfig] = {
+    "estimator_motion": VisionConfig(),                 # [I(t), 5 (I(t) - I(t-5))]
+    "estimator_single": VisionConfig(motion_gap=0),     # I(t) only
+}
+"""The state estimators the book ships in data/vgai/, by name."""
+
+
+def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Optional[dict] = None) -> Path:
+    """Save a RelativeCost's summary with its configuration as JSON (what the notebooks display)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    out = {"config": dataclasses.asdict(cfg), **result.summary(), **(extra or {})}
+    path.write_text(json.dumps(out, indent=2) + "\n")
+    return path
+
+
+def _check_name(name: str, runs: dict, kind: str) -> None:
+    if name not in runs:
+        raise ValueError(f"unknown run {name!r}; the book's {kind} runs are {sorted(runs)}")
+
+
+def book_dagnn(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
+               write_json: bool = False):
+    """Load (or train, about half a minute) the book's DAGNN ``name`` and evaluate it on ``episodes``
+    held-out episodes (seed EVAL_SEED). Returns (controller, RelativeCost)."""
+    _check_name(name, DAGNN_RUNS, "DAGNN")
+    cfg, tcfg = FlockConfig(), DAGNN_RUNS[name]
+    path = DATA_DIR / "dagnn" / f"{name}.pt"
+    controller, trained = load_or_train(path, cfg, tcfg, train_dagnn, retrain=retrain, progress=progress)
+    result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
+    hist = controller.meta["history"]
+    if write_json or trained:
+        write_evaluation(path.with_suffix(".json"), result, cfg,
+                         extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
+                                "validation_by_round": hist["rounds"]})
+    return controller, result
+
+
+def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
+              write_json: bool = False):
+    """Load (or train, about 11 minutes) the book's VGAI ``name`` and evaluate it on ``episodes``
+    held-out episodes (seed EVAL_SEED). Returns (controller, RelativeCost)."""
+    _check_name(name, VGAI_RUNS, "VGAI")
+    cfg, tcfg = FlockConfig(), VGAI_RUNS[name]
+    path = DATA_DIR / "vgai" / f"{name}.pt"
+    controller, trained = load_or_train(path, cfg, tcfg, train_vgai, retrain=retrain, progress=progress)
+    result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
+    hist = controller.meta["history"]
+    if write_json or trained:
+        write_evaluation(path.with_suffix(".json"), result, cfg,
+                         extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
+                                "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
+                                "stage1_cached": hist.get("stage1_cached"),  # then not in train_seconds
+                                "validation": hist["rounds"]})
+    return controller, result
+
+
+def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress: bool = True):
+    """Load (or train and save) the book's state estimator ``name`` in data/vgai/.
+    Returns (cnn, vision, meta)."""
+    _check_name(name, ESTIMATOR_RUNS, "estimator")
+    path = DATA_DIR / "vgai" / f"{name}.pt"
+    vision = ESTIMATOR_RUNS[name]
+    if path.is_file() and not retrain:
+        cnn, stored_vision, meta = load_estimator(path)
+        if stored_vision == vision and meta.get("steps") == steps:
+            return cnn, vision, meta
+    cfg = FlockConfig()
+    cnn, losses, seconds = train_state_estimator(cfg, vision, steps=steps, progress=progress)
+    quality = estimator_quality(cnn, vision, cfg)
+    meta = {"steps": steps, "losses": losses, "seconds": seconds,
+            "quality": {str(t): q for t, q in quality.items()}}
+    save_estimator(path, cnn, vision, meta)
+    return cnn, vision, meta

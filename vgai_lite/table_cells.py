@@ -1,0 +1,121 @@
+"""One cell of a reproduced table: a trained controller flown in one flight configuration.
+
+Introduced in notebook 07. A cell is one (controller, flight configuration, episodes, seed); its
+result is written to ``OUT/cells/KEY.json`` (KEY: ``checkpoints.config_hash`` of everything that
+defines it) before the next starts, so an interrupted run resumes where it stopped and a cell shared
+by several tables is computed once. Trained models are reused: the book's shipped checkpoints
+(``runs.DAGNN_RUNS``, ``runs.VGAI_RUNS``) when the configuration is the same, otherwise
+``OUT/models/``; VGAI runs that differ only in K share their first stage through ``OUT/stage1/``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+from .book import DATA_DIR, ROOT
+from .checkpoints import config_hash, is_finished_with, load_controller
+from .config import FlockConfig
+from .controllers import LocalController
+from .dagnn_training import train_dagnn
+from .evaluate import relative_cost
+from .imitation import load_or_train
+from .runs import DAGNN_RUNS, VGAI_RUNS
+from .vgai_training import train_vgai
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """A trained controller: kind ("dagnn", "vgai" or "local"), training configuration and name."""
+
+    kind: str
+    cfg: FlockConfig
+    tcfg: Optional[object] = None
+    name: str = ""
+
+    def identity(self) -> dict:
+        return {"kind": self.kind, "config": self.cfg.to_dict(),
+                "train_config": self.tcfg.to_dict() if self.tcfg is not None else None}
+
+    def key(self) -> str:
+        return config_hash(self.identity())
+
+
+def _hash(obj) -> str:
+    return hashlib.sha1(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
+def _shipped_path(spec: ModelSpec) -> Optional[Path]:
+    """The book's checkpoint for ``spec`` when it ships one with exactly this configuration."""
+    if spec.cfg != FlockConfig():
+        return None
+    runs, folder = (DAGNN_RUNS, "dagnn") if spec.kind == "dagnn" else (VGAI_RUNS, "vgai")
+    for name, t in runs.items():
+        if t == spec.tcfg:
+            return DATA_DIR / folder / f"{name}.pt"
+    return None
+
+
+def model_path(spec: ModelSpec, out: Path) -> Path:
+    return _shipped_path(spec) or out / "models" / f"{spec.name}_{spec.key()}.pt"
+
+
+def obtain(spec: ModelSpec, out: Path, progress: bool = False,
+           retrain: bool = False) -> tuple[Optional[Path], float, bool]:
+    """Make sure ``spec`` has a finished checkpoint (train and save it now if none of the same
+    configuration exists, or if ``retrain``). Returns (its path, None for the local heuristic;
+    seconds spent; whether it was trained now). VGAI runs share their stage 1 through ``OUT/stage1/``."""
+    if spec.kind == "local":
+        return None, 0.0, False
+    path = model_path(spec, out)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
+    start = time.perf_counter()
+    if trained:  # otherwise the checkpoint is ready; evaluate_cell loads it in the flight configuration
+        if spec.kind == "dagnn":
+            load_or_train(path, spec.cfg, spec.tcfg, train_dagnn, retrain=retrain, progress=progress)
+        else:
+            load_or_train(path, spec.cfg, spec.tcfg, train_vgai, retrain=retrain, progress=progress,
+                          stage1_cache=out / "stage1")
+    return path, time.perf_counter() - start, trained
+
+
+def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int, out: Path,
+                  progress: bool = False, retrain: bool = False, fresh: bool = False) -> dict:
+    """Fly the controller of ``spec`` in ``flight`` (episodes from ``seed``) and record its figures;
+    read from OUT/cells/ if this exact cell was computed before, unless ``fresh``. ``retrain``:
+    train the controller anew first."""
+    ident = {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
+    key = config_hash(ident)
+    path = out / "cells" / f"{key}.json"
+    if path.is_file() and not fresh:
+        return {**json.loads(path.read_text()), "computed_now": False}
+    ckpt, train_seconds, trained = obtain(spec, out, progress, retrain=retrain)
+    # fly it in this column's configuration (trained in spec.cfg)
+    controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
+    start = time.perf_counter()
+    res = relative_cost(controller, flight, episodes=episodes, seed=seed, name=spec.name)
+    record = {"key": key, **ident, "name": spec.name, **res.summary(),
+              "min_distance": round(float(res.safety.min_distance.min()), 4),
+              "expert_min_distance": round(float(res.expert_safety.min_distance.min()), 4),
+              "eval_seconds": round(time.perf_counter() - start, 1),
+              "train_seconds_now": round(train_seconds, 1) if trained else 0.0,
+              "trained_now": trained,
+              "checkpoint": (str(Path(ckpt).resolve().relative_to(ROOT.resolve()))
+                             if ckpt is not None and _inside(ckpt, ROOT) else (str(ckpt) if ckpt else None))}
+    if spec.kind != "local":
+        record["train_seconds_recorded"] = round(controller.meta.get("history", {}).get("seconds", 0.0), 1)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=1) + "\n")
+    return {**record, "computed_now": True}
+
+
+def _inside(path, root) -> bool:
+    try:
+        Path(path).resolve().relative_to(Path(root).resolve())
+        return True
+    except ValueError:
+        return False

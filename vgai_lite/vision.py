@@ -1,0 +1,137 @@
+"""What a VGAI agent's CNN is given: the camera, the motion frame, and ONE batched image pipeline.
+
+Introduced in notebook 05. The paper renders one AirSim frame per drone and step (its figure 4). A
+single frame shows positions only; the expert's action is dominated by velocity alignment, which a
+camera sees only across frames, so the CNN's input pairs the frame of now with the frame of g steps
+ago:
+
+    H_i(t) = [ I_i(t), MOTION_SCALE (I_i(t) - I_i(t - g)) ]        (motion_mode "difference")
+
+Both the controller (one step at a time, ``learned_controllers.VGAIController``) and the training
+(K-step windows cut from stored flights, ``vgai_training``) call :func:`camera_input` with the
+positions of now and of g steps ago; the only difference between the two is where those earlier
+positions come from (the controller remembers them, training reads them from the stored flight),
+and both take them from :func:`positions_before` / :func:`flown_backwards`.
+
+Shapes: positions r (..., N, 2); images (..., N, C, H, W).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import torch
+
+from .config import FlockConfig, config_dict
+from .render import RenderConfig, render_egocentric, render_topdown, with_motion
+
+VIEWS = ("egocentric", "topdown")
+MOTION_MODES = ("difference", "stack")
+
+MOTION_SCALE = 5.0
+"""Gain on the frame difference I(t) - I(t - g) (motion_mode "difference"): with g = 5 steps a
+neighbour's image moves a fraction of a column between the frames, so the raw difference is small
+next to I(t); 5 brings the two channels to comparable ranges for the CNN's first layer."""
+
+
+@dataclass(frozen=True)
+class VisionConfig:
+    """How a VGAI agent turns the world into the CNN's input (our choices; the paper renders one
+    AirSim frame per step).
+
+    Attributes:
+        view: "egocentric" (the 360° panorama, default) or "topdown".
+        render: RenderConfig of the views. Default: 4 cameras of 12 x 32 (a 12 x 128 panorama, gray and
+            depth channels): half the rows of the renderer's default, as the bodies sit on the
+            horizon and the depth channel already gives their distance; it halves the CNN's cost.
+        motion_gap: g, the frame the current one is paired with is g steps old (0: a single frame).
+            A single frame shows positions only; the expert's action is dominated by velocity
+            alignment, visible only across frames.
+        motion_mode: "difference" ([I(t), MOTION_SCALE (I(t) - I(t-g))]) or "stack" ([I(t), I(t-g)]).
+        prehistory: the episode starts mid-flight, with the cameras already running: the frames
+            before t = 0 are rendered from the initial state flown backwards at its constant initial
+            velocity, r(-k) = r(0) - k Ts v(0). Without it an agent is blind to motion for its first
+            g steps, exactly when the expert acts hardest (80 % of eq. 1 accrues in the first 10
+            steps). The velocities serve only the camera model, once, to draw those frames: they never
+            reach the CNN except as pixels. False: the first frame stands in for the missing ones.
+    """
+
+    view: str = "egocentric"
+    render: RenderConfig = RenderConfig(view_height=12, view_width=32)
+    motion_gap: int = 5
+    motion_mode: str = "difference"
+    prehistory: bool = True
+
+    def __post_init__(self) -> None:
+        if self.view not in VIEWS:
+            raise ValueError(f"VisionConfig: view must be one of {VIEWS}, got {self.view!r}")
+        if not isinstance(self.motion_gap, int) or self.motion_gap < 0:
+            raise ValueError(f"VisionConfig: motion_gap must be an integer >= 0, got {self.motion_gap!r}")
+        if self.motion_mode not in MOTION_MODES:
+            raise ValueError(f"VisionConfig: motion_mode must be one of {MOTION_MODES}, got {self.motion_mode!r}")
+
+    def image_shape(self) -> tuple:
+        """(C, H, W) of the CNN's input."""
+        c = len(self.render.channels) if self.view == "egocentric" else 1
+        c *= 2 if self.motion_gap > 0 else 1
+        if self.view == "egocentric":
+            return (c, self.render.view_height, self.render.panorama_width)
+        return (c, self.render.topdown_size, self.render.topdown_size)
+
+    def frame(self, r: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
+        """Every agent's raw view at one instant, r (B, N, 2) -> (B, N, C0, H, W)."""
+        if self.view == "egocentric":
+            return render_egocentric(r, cfg, self.render)
+        return render_topdown(r, cfg, self.render)
+
+    def to_dict(self) -> dict:
+        return config_dict(self)
+
+    @staticmethod
+    def from_dict(d: dict) -> "VisionConfig":
+        """The inverse of ``to_dict``. Every field must be there: a file that lacks one was written
+        by an older version whose behaviour the class defaults may not reproduce."""
+        missing = [f.name for f in dataclasses.fields(VisionConfig) if f.name not in d]
+        if missing:
+            raise ValueError(f"vision settings lack {missing}: the file predates them; train the model again")
+        rd = dict(d["render"])
+        rd["channels"] = tuple(rd["channels"])
+        return VisionConfig(view=d["view"], render=RenderConfig(**rd), motion_gap=d["motion_gap"],
+                            motion_mode=d["motion_mode"], prehistory=d["prehistory"])
+
+
+def flown_backwards(r0: torch.Tensor, v0: torch.Tensor, steps, Ts: float) -> torch.Tensor:
+    """Positions ``steps`` steps before t = 0 of a swarm that flew at its constant initial velocity:
+    r(-k) = r(0) - k Ts v(0). ``steps``: an int, or a tensor broadcastable to r0 (e.g. (M, 1, 1))."""
+    return r0 - (steps * Ts) * v0
+
+
+def positions_before(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor,
+                     e: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+    """The positions g steps before stored states (episode e, step t) of flights r, v (T, E, N, 2):
+    (M, N, 2). Before t = 0: the initial state flown backwards (``vision.prehistory``), else the
+    first state stands in for the missing ones."""
+    t_prev = t - vision.motion_gap
+    r_prev = r[t_prev.clamp(min=0), e]
+    if vision.prehistory:
+        back = flown_backwards(r[0, e], v[0, e], (-t_prev).clamp(min=0).to(r.dtype)[:, None, None], cfg.Ts)
+        r_prev = torch.where((t_prev < 0)[:, None, None], back, r_prev)
+    return r_prev
+
+
+def camera_input(vision: VisionConfig, cfg: FlockConfig, r_now: torch.Tensor,
+                 r_before: torch.Tensor) -> torch.Tensor:
+    """The CNN's input H(t) of every agent, from the positions now and g steps before:
+    r_now, r_before (M, N, 2) -> (M, N, C, H, W). With motion_gap 0, ``r_before`` is ignored."""
+    now = vision.frame(r_now, cfg)
+    if vision.motion_gap == 0:
+        return now
+    return with_motion(now, vision.frame(r_before, cfg), vision.motion_mode, MOTION_SCALE)
+
+
+def stored_images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor,
+                  e: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+    """CNN inputs of every agent at stored states (episode e, step t), e, t (M,) of flights r, v
+    (T, E, N, 2): (M, N, C, H, W). What the agents saw when they flew those states."""
+    return camera_input(vision, cfg, r[t, e], positions_before(vision, cfg, r, v, e, t))
