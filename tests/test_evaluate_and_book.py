@@ -91,3 +91,18 @@ def test_aggregation_and_feature_checks_pass_the_library_and_catch_mistakes():
     assert check_local_features(lambda r, v, R: local_features(r[None], v[None], R)[0])
     flipped = check_local_features(lambda r, v, R: -local_features(r[None], v[None], R)[0])
     assert not flipped and "Sign flipped" in flipped.message
+
+
+def test_consensus_figures_tell_a_flock_from_a_swarm_that_falls_apart():
+    from vgai_lite.consensus import consensus, groups
+
+    cfg = FlockConfig(N=20)
+    flock = consensus(ExpertController(cfg), cfg, episodes=2, times=(0.0, 1.0))
+    v0, v1 = flock.median_variance().values()
+    assert v1 < 1e-3 * v0  # the expert aligns every velocity within a second
+    assert flock.share_connected == 1.0 and flock.summary()["episodes"] == 2
+    # two clusters 10 m apart are two groups; joined by a chain of neighbours they are one
+    r = torch.tensor([[[0.0, 0.0], [1.0, 0.0], [10.0, 0.0], [11.0, 0.0]]])
+    assert groups(r, 1.5).tolist() == [2]
+    chain = torch.tensor([[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]]])
+    assert groups(chain, 1.5).tolist() == [1]

@@ -8,7 +8,8 @@ this list):
   the problem      ``config`` (constants), ``flocking`` (dynamics, initial conditions, cost eq. 1,
                    rollouts), ``controllers`` (expert eqs. 2-3, local heuristic), ``evaluate``
                    (relative cost and close calls)
-  communication    ``graphs`` (who hears whom, S(t)), ``features`` (the DAGNN's 6 exact local
+  communication    ``graphs`` (who hears whom, S(t)), ``consensus`` (did it flock: velocity
+                   variance late in a flight, cohesion), ``features`` (the DAGNN's 6 exact local
                    features), ``aggregation`` (Z(t), eq. 6)
   what drones see  ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference),
                    ``vision`` (the CNN's input: frames, motion, one image pipeline)
@@ -27,6 +28,7 @@ this list):
 from .aggregation import AggregationBuffer, aggregation_sequence
 from .checkpoints import load_controller, load_estimator, save_controller
 from .config import FlockConfig
+from .consensus import Consensus, consensus, velocity_variance
 from .controllers import (ExpertController, LocalController, expert_control, local_control,
                           potential, potential_gradient)
 from .dagnn_training import DAGNNTrainConfig, train_dagnn
@@ -54,5 +56,6 @@ __all__ = [
     "camera_input", "AggregationMLP", "VisualCNN", "VGAIModel", "DAGNNController", "VGAIController",
     "save_controller", "load_controller", "load_estimator", "dagger_mix", "fly_dagger", "load_or_train",
     "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "train_vgai", "bptt_loss",
-    "train_state_estimator", "book_dagnn", "book_vgai", "book_estimator",
+    "train_state_estimator", "book_dagnn", "book_vgai", "book_estimator", "consensus", "Consensus",
+    "velocity_variance",
 ]

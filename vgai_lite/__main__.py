@@ -51,12 +51,15 @@ def cmd_lab(args, extra):
 
 def cmd_evaluate(args, extra):
 
-    from .controllers import LocalController
+    from .consensus import consensus
+    from .controllers import ExpertController, LocalController
     from .evaluate import relative_cost
 
     cfg = _cfg_from(args)
     if args.controller == "local":
         controller = LocalController(cfg)
+    elif args.controller == "expert":
+        controller = ExpertController(cfg)
     elif args.controller.endswith(".pt"):
         from .checkpoints import load_controller
 
@@ -68,11 +71,14 @@ def cmd_evaluate(args, extra):
         cfg = controller.trained_config.replace(**changes)
         controller.cfg = cfg
     else:
-        raise SystemExit(f"--controller must be 'local' or a checkpoint file (.pt), got {args.controller!r}")
+        raise SystemExit(f"--controller must be 'local', 'expert' or a checkpoint file (.pt), got {args.controller!r}")
     res = relative_cost(controller, cfg, episodes=args.episodes, seed=args.seed, device=args.device)
     print(res)
+    if args.consensus:
+        flock = consensus(controller, cfg, episodes=args.consensus, seed=args.seed)
+        print(flock)
     if args.json:
-        out = {"config": cfg.to_dict(), **res.summary()}
+        out = {"config": cfg.to_dict(), **res.summary(), **({"consensus": flock.summary()} if args.consensus else {})}
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
         print("wrote", args.json)
@@ -225,7 +231,10 @@ def main(argv=None):
     sub.add_parser("lab", help="open the book in JupyterLab; other flags go to jupyter lab")
     p = sub.add_parser("evaluate", help="relative cost of a controller against the expert")
     p.add_argument("--controller", default="local",
-                   help="'local' or a checkpoint, e.g. data/dagnn/dagnn_K4.pt")
+                   help="'local', 'expert' or a checkpoint, e.g. data/dagnn/dagnn_K4.pt")
+    p.add_argument("--consensus", type=int, default=0, metavar="E",
+                   help="also fly E episodes of 5 s and print the velocity variance at 0.5, 1, 2, 5 s and "
+                        "whether the swarm stays connected (did it flock?)")
     p.add_argument("--episodes", type=int, default=50)
     p.add_argument("--seed", type=int, default=EVAL_SEED, help=f"initial-condition seed (default {EVAL_SEED})")
     p.add_argument("--device", default=None)

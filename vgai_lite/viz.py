@@ -16,17 +16,13 @@ from matplotlib import animation
 from matplotlib.collections import LineCollection
 
 from .config import FlockConfig
+from .consensus import velocity_variance
 from .flocking import Trajectory
 from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
 
 
 def _np(x: torch.Tensor) -> np.ndarray:
     return x.detach().cpu().double().numpy()
-
-
-def velocity_variance(v: torch.Tensor) -> torch.Tensor:
-    """The summand of eq. 1 at each step: (1/N) sum_i ||v_i(t) - vbar(t)||^2, (T, B, N, 2) -> (T, B)."""
-    return (v - v.mean(dim=2, keepdim=True)).square().sum(-1).mean(-1)
 
 
 def _links(r: np.ndarray, R: float) -> np.ndarray:
