@@ -199,3 +199,15 @@ def test_state_estimator_files_round_trip(tmp_path):
     assert vision2 == VISION and meta == {"steps": 1}
     x = torch.randn(2, C, H, W)
     torch.testing.assert_close(cnn2(x), cnn.eval()(x))
+
+
+def test_synthetic_velocities_span_the_disagreements_late_and_early_flights_have():
+    from vgai_lite.vgai_training import SYNTHETIC_SPEEDS, synthetic_velocities
+
+    v = torch.zeros(400, 30, 2) + torch.tensor([2.0, -1.0])
+    vs = synthetic_velocities(v, torch.Generator().manual_seed(0))
+    spread = (vs - vs.mean(1, keepdim=True)).std(dim=(1, 2))  # one scale per swarm
+    assert vs.shape == v.shape
+    assert SYNTHETIC_SPEEDS[0] / 2 < spread.min() < 3 * SYNTHETIC_SPEEDS[0] and spread.max() > SYNTHETIC_SPEEDS[1] / 2
+    torch.testing.assert_close(vs.mean(dim=(0, 1)), torch.tensor([2.0, -1.0]), atol=0.1, rtol=0)
+    torch.testing.assert_close(synthetic_velocities(v, torch.Generator().manual_seed(0)), vs)

@@ -20,6 +20,7 @@ Loss L1 (eq. 10) and Adam at learning rate 1e-3 (the paper's) in every stage.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,13 +41,16 @@ from .graphs import DEFAULT_GSO, adjacency, gso
 from .imitation import EpisodeStore, fit_l1, validation_record
 from .learned_controllers import VGAIController
 from .models import AggregationMLP, VGAIModel, VisualCNN
-from .vision import VisionConfig, stored_images
+from .vision import VisionConfig, camera_input, flown_backwards, positions_before, stored_images
 
 log = logging.getLogger(__name__)
 
 MLP_LATE_STRIDE = 4
 """Stage 2 keeps every step of the first ``early_steps`` of each flight and 1 step in 4 after: the
 expert's labels live early (as the DAGNN's ``keep_late`` = 0.25)."""
+SYNTHETIC_SPEEDS = (0.01, 1.5)
+"""Range (m/s) of the per-agent velocity deviations of ``synthetic_velocities`` (experimental): from
+below the late-flight disagreements eq. 1 must remove to the early ones."""
 MLP_BATCH = 1024
 """Rows (agent-steps) per gradient step of stage 2 (as the DAGNN's ``batch_size``)."""
 
@@ -70,6 +74,10 @@ class VGAITrainConfig:
         early_steps, early_share: sampled states and window ends fall in the first ``early_steps``
             steps with probability ``early_share`` (the expert's labels live early).
         seed: seed of the training initial conditions, sampling and weights.
+        synthetic_share: stage 1 shows this share of its states with synthetic velocities
+            (``synthetic_velocities``; experimental, 0 in the book's runs so far). Stored by
+            ``to_dict`` only when not 0: files written before the field existed had none, so the
+            shipped checkpoints and table cells keep their identity.
     """
 
     F: int = 24
@@ -92,9 +100,13 @@ class VGAITrainConfig:
     early_steps: int = 50
     early_share: float = 0.75
     seed: int = 0
+    synthetic_share: float = 0.0
 
     def to_dict(self) -> dict:
-        return config_dict(self)
+        d = config_dict(self)
+        if d["synthetic_share"] == 0.0:
+            del d["synthetic_share"]
+        return d
 
     def new_model(self) -> VGAIModel:
         """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""
@@ -121,23 +133,45 @@ def feature_scale(cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor) -> tuple[t
     return X.mean((0, 1)), X.std((0, 1)).clamp(min=1e-6)
 
 
+def synthetic_velocities(v: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+    """Velocities a swarm could have: its mean velocity plus independent per-agent deviations of a
+    scale drawn log-uniformly in [SYNTHETIC_SPEEDS] m/s, one scale per swarm. v (M, N, 2) -> (M, N, 2)."""
+    lo, hi = SYNTHETIC_SPEEDS
+    scale = torch.empty(v.shape[0], 1, 1).uniform_(math.log(lo), math.log(hi), generator=gen).exp()
+    return v.mean(1, keepdim=True) + scale * torch.randn(v.shape, generator=gen)
+
+
+def _estimation_batch(vision, cfg, r, v, states, tcfg, gen, synthetic_share):
+    """Images and exact local features of ``states`` stored swarm states; a ``synthetic_share`` of
+    them with synthetic velocities (the motion frame drawn from the state flown backwards at them)."""
+    T, E = r.shape[:2]
+    e = torch.randint(0, E, (states,), generator=gen)
+    t = sample_times(states, T, tcfg, gen)
+    if synthetic_share <= 0:
+        return stored_images(vision, cfg, r, v, e, t), local_features(r[t, e], v[t, e], cfg.R)
+    synth = (torch.rand(states, generator=gen) < synthetic_share)[:, None, None]
+    vs = torch.where(synth, synthetic_velocities(v[t, e], gen), v[t, e])
+    before = torch.where(synth, flown_backwards(r[t, e], vs, vision.motion_gap, cfg.Ts),
+                         positions_before(vision, cfg, r, v, e, t))
+    return camera_input(vision, cfg, r[t, e], before), local_features(r[t, e], vs, cfg.R)
+
+
 def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor,
                         v: torch.Tensor, steps: int, states: int, tcfg: VGAITrainConfig,
-                        gen: torch.Generator, progress: bool = True) -> list:
+                        gen: torch.Generator, progress: bool = True, synthetic_share: float = 0.0) -> list:
     """Visual state estimation: train the CNN (through its ``aux`` head) to regress the standardised
     exact local features of every agent from its own images, on stored states r, v (T, E, N, 2).
-    Each step draws ``states`` swarm states (all N agents' images). Returns the L1 loss per step."""
-    T, E = r.shape[:2]
+    Each step draws ``states`` swarm states (all N agents' images). ``synthetic_share``: the share of
+    them shown with synthetic velocities (``synthetic_velocities``; experimental, off in the book's
+    runs). Returns the L1 loss per step."""
     x_mean, x_std = feature_scale(cfg, r, v)
     cnn.aux_mean.copy_(x_mean), cnn.aux_std.copy_(x_std)
     opt = torch.optim.Adam(cnn.parameters(), lr=tcfg.lr)
     cnn.train()
     losses = []
     for _ in tqdm(range(steps), desc="stage 1: visual state estimation", disable=not progress):
-        e = torch.randint(0, E, (states,), generator=gen)
-        t = sample_times(states, T, tcfg, gen)
-        img = stored_images(vision, cfg, r, v, e, t)
-        target = (local_features(r[t, e], v[t, e], cfg.R) - x_mean) / x_std
+        img, X = _estimation_batch(vision, cfg, r, v, states, tcfg, gen, synthetic_share)
+        target = (X - x_mean) / x_std
         loss = nnf.l1_loss(cnn.aux(cnn(img.flatten(0, 1))), target.flatten(0, 1))
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -149,12 +183,14 @@ def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, 
 
 @torch.no_grad()
 def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, episodes: int = 8,
-                      times=(2, 8, 20, 60), seed: int = EVAL_SEED) -> dict:
+                      times=(2, 8, 20, 60), seed: int = EVAL_SEED, pilot=None) -> dict:
     """Correlation between the CNN's estimate (aux head) and the exact local features, per feature,
-    at a few time steps of expert flights from held-out initial conditions (``seed``, the book's
-    EVAL_SEED by default): {t: [6 values]}."""
+    at a few time steps of flights from held-out initial conditions (``seed``, the book's EVAL_SEED
+    by default) flown by ``pilot`` (default the expert; a VGAI shows the states VGAI meets):
+    {t: [6 values]}."""
     r0, v0 = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
-    traj = rollout(ExpertController(cfg), cfg, r0, v0)
+    pilot = ExpertController(cfg) if pilot is None else pilot
+    traj = rollout(pilot, cfg, r0, v0, steps=max(max(times) + 1, cfg.T))
     out = {}
     for t in times:
         e, tt = torch.arange(episodes), torch.full((episodes,), t)
@@ -169,8 +205,8 @@ def stage1_identity(cfg: FlockConfig, tcfg: VGAITrainConfig) -> dict:
     the very same stage-1 CNN, and share it through the cache."""
     t = tcfg.to_dict()
     fields = ("F", "cnn_widths", "cnn_hidden", "vision", "expert_episodes", "warm_steps", "warm_states",
-              "lr", "early_steps", "early_share", "seed")
-    return {"config": cfg.to_dict(), "train": {k: t[k] for k in fields}}
+              "lr", "early_steps", "early_share", "seed", "synthetic_share")
+    return {"config": cfg.to_dict(), "train": {k: t[k] for k in fields if k in t}}
 
 
 def stage1_cache_file(folder: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrainConfig) -> Path:
@@ -186,7 +222,7 @@ def cached_stage1(cnn, cfg, tcfg, r, v, gen, progress, cache: Optional[Union[str
         return {**load_stage1(path, cnn, gen), "stage1_cached": path.name}
     start = time.perf_counter()
     record = {"warm_loss": fit_state_estimator(cnn, tcfg.vision, cfg, r, v, tcfg.warm_steps, tcfg.warm_states,
-                                               tcfg, gen, progress)}
+                                               tcfg, gen, progress, tcfg.synthetic_share)}
     record["stage1_seconds"] = time.perf_counter() - start
     if path is not None:
         save_stage1(path, stage1_identity(cfg, tcfg), cnn, gen, record)
@@ -326,7 +362,8 @@ def _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cac
 
 
 def train_state_estimator(cfg: FlockConfig, vision: VisionConfig, steps: int = 3000, states: int = 8,
-                          F: int = 24, episodes: int = 40, seed: int = 0, progress: bool = True):
+                          F: int = 24, episodes: int = 40, seed: int = 0, progress: bool = True,
+                          synthetic_share: float = 0.0):
     """Fly ``episodes`` expert episodes, then train a fresh VisualCNN to estimate the exact local
     features from images (stage 1 of VGAI's training, on its own; notebook 05).
     Returns (cnn, losses, seconds)."""
@@ -339,5 +376,5 @@ def train_state_estimator(cfg: FlockConfig, vision: VisionConfig, steps: int = 3
         store.fly(None, cfg, *sample_initial_state(cfg, episodes, gen), 0.0, gen)
         r, v, _ = store.tensors()
         cnn = tcfg.new_model().cnn
-        losses = fit_state_estimator(cnn, vision, cfg, r, v, steps, states, tcfg, gen, progress)
+        losses = fit_state_estimator(cnn, vision, cfg, r, v, steps, states, tcfg, gen, progress, synthetic_share)
     return cnn, losses, time.perf_counter() - start
