@@ -66,40 +66,39 @@ def _check_name(name: str, runs: dict, kind: str) -> None:
         raise ValueError(f"unknown run {name!r}; the book's {kind} runs are {sorted(runs)}")
 
 
-def book_dagnn(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
-               write_json: bool = False):
-    """Load (or train, about half a minute) the book's DAGNN ``name`` and evaluate it on ``episodes``
-    held-out episodes (seed EVAL_SEED). Returns (controller, RelativeCost)."""
-    _check_name(name, DAGNN_RUNS, "DAGNN")
-    cfg, tcfg = FlockConfig(), DAGNN_RUNS[name]
-    path = DATA_DIR / "dagnn" / f"{name}.pt"
-    controller, trained = load_or_train(path, cfg, tcfg, train_dagnn, retrain=retrain, progress=progress)
+def _book_model(name: str, runs: dict, folder: str, train, retrain: bool, episodes: int, progress: bool,
+                write_json: bool, record):
+    """Load or train data/FOLDER/NAME.pt, evaluate it; write NAME.json (with ``record(history)``) when
+    trained now or asked. Returns (controller, RelativeCost)."""
+    _check_name(name, runs, folder.upper())
+    cfg, tcfg = FlockConfig(), runs[name]
+    path = DATA_DIR / folder / f"{name}.pt"
+    controller, trained = load_or_train(path, cfg, tcfg, train, retrain=retrain, progress=progress)
     result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
     hist = controller.meta["history"]
     if write_json or trained:
         write_evaluation(path.with_suffix(".json"), result, cfg,
                          extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
-                                "validation_by_round": hist["rounds"]})
+                                **record(hist)})
     return controller, result
+
+
+def book_dagnn(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
+               write_json: bool = False):
+    """Load (or train, about half a minute) the book's DAGNN ``name`` and evaluate it on ``episodes``
+    held-out episodes (seed EVAL_SEED). Returns (controller, RelativeCost)."""
+    return _book_model(name, DAGNN_RUNS, "dagnn", train_dagnn, retrain, episodes, progress, write_json,
+                       lambda hist: {"validation_by_round": hist["rounds"]})
 
 
 def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
               write_json: bool = False):
     """Load (or train, about 11 minutes) the book's VGAI ``name`` and evaluate it on ``episodes``
     held-out episodes (seed EVAL_SEED). Returns (controller, RelativeCost)."""
-    _check_name(name, VGAI_RUNS, "VGAI")
-    cfg, tcfg = FlockConfig(), VGAI_RUNS[name]
-    path = DATA_DIR / "vgai" / f"{name}.pt"
-    controller, trained = load_or_train(path, cfg, tcfg, train_vgai, retrain=retrain, progress=progress)
-    result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
-    hist = controller.meta["history"]
-    if write_json or trained:
-        write_evaluation(path.with_suffix(".json"), result, cfg,
-                         extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
-                                "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
-                                "stage1_cached": hist.get("stage1_cached"),  # then not in train_seconds
-                                "validation": hist["rounds"]})
-    return controller, result
+    return _book_model(name, VGAI_RUNS, "vgai", train_vgai, retrain, episodes, progress, write_json,
+                       lambda hist: {"stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
+                                     "stage1_cached": hist.get("stage1_cached"),  # then not in train_seconds
+                                     "validation": hist["rounds"]})
 
 
 def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress: bool = True):
