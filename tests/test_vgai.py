@@ -211,3 +211,41 @@ def test_synthetic_velocities_span_the_disagreements_late_and_early_flights_have
     assert SYNTHETIC_SPEEDS[0] / 2 < spread.min() < 3 * SYNTHETIC_SPEEDS[0] and spread.max() > SYNTHETIC_SPEEDS[1] / 2
     torch.testing.assert_close(vs.mean(dim=(0, 1)), torch.tensor([2.0, -1.0]), atol=0.1, rtol=0)
     torch.testing.assert_close(synthetic_velocities(v, torch.Generator().manual_seed(0)), vs)
+
+
+def test_motion_features_vanish_when_nothing_moves_and_flip_with_the_motion():
+    """VisualCNN(motion_features=F_m): the last F_m features are odd in the motion channels, the
+    others even; a swarm moving as one (every drone's motion frame 0) gives exactly 0 on them, and
+    so does the aux head's velocity estimate. The controller flying such a CNN: the same."""
+    C, H, W = VISION.image_shape()
+    torch.manual_seed(0)
+    cnn = VisualCNN(C, H, W, 6, (2, 4), 8, motion_features=2).double()
+    x = torch.randn(3, C, H, W, dtype=torch.float64)
+    mirrored = torch.cat((x[:, :C // 2], -x[:, C // 2:]), 1)
+    torch.testing.assert_close(cnn(mirrored)[:, :4], cnn(x)[:, :4])
+    torch.testing.assert_close(cnn(mirrored)[:, 4:], -cnn(x)[:, 4:])
+    assert cnn(x)[:, 4:].abs().min() > 0
+    # a rigidly translating swarm: the images of now and of g steps ago agree, the motion features are 0
+    r, _ = sample_initial_state(CFG, 2, torch.Generator().manual_seed(1), dtype=torch.float64)
+    still = camera_input(VISION, CFG, r + 0.3, r)
+    X = cnn(still.flatten(0, 1))
+    assert X[:, 4:].abs().max() < 1e-9 and X[:, :4].abs().min() > 0  # 0 up to rounding of the offsets
+    assert cnn.estimate_local_features(still.flatten(0, 1))[:, :2].abs().max() < 1e-9
+    with pytest.raises(ValueError, match="motion_features"):
+        VisualCNN(C, H, W, 6, motion_features=7)
+    with pytest.raises(ValueError, match="difference"):
+        VGAITrainConfig(motion_features=2, vision=dataclasses.replace(VISION, motion_mode="stack"))
+
+
+def test_a_cnn_with_motion_features_round_trips_through_both_file_kinds(tmp_path):
+    C, H, W = VISION.image_shape()
+    torch.manual_seed(0)
+    cnn = VisualCNN(C, H, W, 6, (2, 4), 8, motion_features=2).eval()
+    cnn2, _, _ = load_estimator(save_estimator(tmp_path / "e.pt", cnn, VISION, {}))
+    assert cnn2.motion_features == 2
+    c = VGAIController(VGAIModel(cnn, AggregationMLP(3, 6, (16,))).eval(), CFG, VISION)
+    c2 = load_controller(save_controller(tmp_path / "c.pt", c))
+    assert c2.model.cnn.motion_features == 2
+    r, v = sample_initial_state(CFG, 2, torch.Generator().manual_seed(0))
+    c.reset(), c2.reset()
+    torch.testing.assert_close(c2(r, v), c(r, v))

@@ -155,7 +155,8 @@ class VGAIController:
         cnn, mlp = self.model.cnn, self.model.mlp
         return {"kind": "vgai", "K": mlp.K, "F": mlp.F, "hidden": list(mlp.hidden), "gso": self.gso_kind,
                 "cnn": {"in_channels": cnn.in_channels, "height": cnn.height, "width": cnn.width,
-                        "widths": list(cnn.widths), "hidden": cnn.hidden},
+                        "widths": list(cnn.widths), "hidden": cnn.hidden,
+                        **({"motion_features": cnn.motion_features} if cnn.motion_features else {})},
                 "vision": self.vision.to_dict()}
 
     def __repr__(self) -> str:

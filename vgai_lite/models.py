@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Sequence
 
 import torch
+import torch.nn.functional as nnf
 from torch import nn
 
 
@@ -89,13 +90,32 @@ class VisualCNN(nn.Module):
       fc        (w2 W) -> hidden -> F
     ``aux`` is an extra linear head F -> 6 used only to warm-start the CNN on the exact local
     features (visual state estimation); the controller never uses it.
+
+    ``motion_features`` F_m (0: off, the paper's plain CNN): the last F_m features are made odd in
+    the motion channels (the second half of the input's channels, D = 5 (I(t) - I(t-g))) and the
+    first F - F_m even, by running the trunk psi on [I, D] and on [I, -D]:
+
+        x_even = (psi(I, D) + psi(I, -D)) / 2,     x_odd = (psi(I, D) - psi(I, -D)) / 2
+
+    A swarm whose drones all move alike shows every drone D = 0, so its odd features are exactly
+    0, and for small motions they are linear in D: a drone's estimate of its neighbours' relative
+    velocities vanishes when they do, instead of settling on a bias that depends on where they
+    stand (the plain CNN's, measured in notebook 06). Then the aux head reads the 2 velocity
+    features from the odd features only (no bias) and the 4 position features from the even ones.
+    It costs a second pass of the trunk.
     """
 
     def __init__(self, in_channels: int, height: int, width: int, F: int = 24,
-                 widths: Sequence[int] = (8, 16), hidden: int = 64):
+                 widths: Sequence[int] = (8, 16), hidden: int = 64, motion_features: int = 0):
         super().__init__()
         if height % 2 or height < 2:
             raise ValueError(f"VisualCNN needs an even image height >= 2, got {height}")
+        if not isinstance(motion_features, int) or not 0 <= motion_features <= F:
+            raise ValueError(f"motion_features must be an integer in [0, F] = [0, {F}], got {motion_features!r}")
+        if motion_features and in_channels % 2:
+            raise ValueError(f"motion_features needs images whose second half of channels is the motion "
+                             f"difference (an even channel count), got {in_channels} channels")
+        self.motion_features = motion_features
         w1, w2 = widths
         self.in_channels, self.height, self.width, self.F = in_channels, height, width, F
         self.widths, self.hidden = (int(w1), int(w2)), int(hidden)
@@ -108,19 +128,41 @@ class VisualCNN(nn.Module):
         self.register_buffer("aux_mean", torch.zeros(6))  # scale of the exact features aux estimates
         self.register_buffer("aux_std", torch.ones(6))
 
+    def aux_standardized(self, x: torch.Tensor) -> torch.Tensor:
+        """The aux head on features x (M, F): the standardised estimate of the 6 local features,
+        (M, 6). With motion features, velocity outputs read only the odd features (no bias),
+        position outputs only the even ones."""
+        if not self.motion_features:
+            return self.aux(x)
+        odd = torch.arange(self.F, device=x.device) >= self.F - self.motion_features
+        vel = torch.arange(6, device=x.device) < 2
+        mask = (vel[:, None] == odd[None, :]).to(x.dtype)  # (6, F)
+        return nnf.linear(x, self.aux.weight * mask, self.aux.bias * (~vel).to(x.dtype))
+
     def estimate_local_features(self, images: torch.Tensor) -> torch.Tensor:
         """The warm-start head's estimate of the 6 exact local features, (M, C, H, W) -> (M, 6)."""
-        return self.aux(self(images)) * self.aux_std + self.aux_mean
+        return self.aux_standardized(self(images)) * self.aux_std + self.aux_mean
+
+    def trunk(self, images: torch.Tensor) -> torch.Tensor:
+        """psi: stem, residual blocks and fully connected layers, (M, C, H, W) -> (M, F)."""
+        # channels-last layout: the same numbers, and on CPU the convolutions' backward pass runs
+        # about twice as fast with it (measured: 0.097 s -> 0.048 s per 400-image step, 2 threads)
+        images = images.contiguous(memory_format=torch.channels_last)
+        return self.fc(self.blocks(torch.relu(self.stem(images))))
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
         """(M, C, H, W) -> (M, F)."""
         if images.shape[1:] != (self.in_channels, self.height, self.width):
             raise ValueError(f"VisualCNN expects images (M, {self.in_channels}, {self.height}, {self.width}), "
                              f"got {tuple(images.shape)}")
-        # channels-last layout: the same numbers, and on CPU the convolutions' backward pass runs
-        # about twice as fast with it (measured: 0.097 s -> 0.048 s per 400-image step, 2 threads)
-        images = images.contiguous(memory_format=torch.channels_last)
-        return self.fc(self.blocks(torch.relu(self.stem(images))))
+        if not self.motion_features:
+            return self.trunk(images)
+        c = self.in_channels // 2
+        mirrored = torch.cat((images[:, :c], -images[:, c:]), dim=1)  # [I, -D]
+        y_plus, y_minus = self.trunk(torch.cat((images, mirrored))).chunk(2)
+        even, odd = (y_plus + y_minus) / 2, (y_plus - y_minus) / 2
+        split = self.F - self.motion_features
+        return torch.cat((even[:, :split], odd[:, split:]), dim=1)
 
     def flops_per_image(self) -> int:
         """Multiply-adds x 2 of one forward pass (convolutions and linear layers)."""
@@ -132,7 +174,7 @@ class VisualCNN(nn.Module):
         total += 2 * 3 * (w1 * w2 + w2 * w2) * w + 2 * w1 * w2 * w              # block 2 (+ 1x1 skip)
         total += 2 * 2 * 2 * 3 * w2 * w2 * w                                    # blocks 3-4
         total += 2 * (w2 * w * self.hidden + self.hidden * self.F)              # fc
-        return total
+        return total * (2 if self.motion_features else 1)                       # [I, D] and [I, -D]
 
 
 class VGAIModel(nn.Module):

@@ -78,6 +78,8 @@ class VGAITrainConfig:
             (``synthetic_velocities``; experimental, 0 in the book's runs so far). Stored by
             ``to_dict`` only when not 0: files written before the field existed had none, so the
             shipped checkpoints and table cells keep their identity.
+        motion_features: F_m, the CNN's features made odd in the motion channels (``VisualCNN``;
+            0: the plain CNN). Needs the "difference" motion mode. Stored like ``synthetic_share``.
     """
 
     F: int = 24
@@ -101,17 +103,26 @@ class VGAITrainConfig:
     early_share: float = 0.75
     seed: int = 0
     synthetic_share: float = 0.0
+    motion_features: int = 0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.synthetic_share <= 1.0:
+            raise ValueError(f"VGAITrainConfig: synthetic_share must be in [0, 1], got {self.synthetic_share!r}")
+        if self.motion_features and (self.vision.motion_gap == 0 or self.vision.motion_mode != "difference"):
+            raise ValueError("VGAITrainConfig: motion_features needs a motion frame in the 'difference' mode "
+                             f"(got motion_gap={self.vision.motion_gap}, motion_mode={self.vision.motion_mode!r})")
 
     def to_dict(self) -> dict:
         d = config_dict(self)
-        if d["synthetic_share"] == 0.0:
-            del d["synthetic_share"]
+        for optional in ("synthetic_share", "motion_features"):  # absent from files written before them
+            if d[optional] == 0:
+                del d[optional]
         return d
 
     def new_model(self) -> VGAIModel:
         """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""
         C, H, W = self.vision.image_shape()
-        return VGAIModel(VisualCNN(C, H, W, self.F, self.cnn_widths, self.cnn_hidden),
+        return VGAIModel(VisualCNN(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
                          AggregationMLP(self.K, self.F, self.hidden))
 
 
@@ -165,6 +176,8 @@ def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, 
     them shown with synthetic velocities (``synthetic_velocities``; experimental, off in the book's
     runs). Returns the L1 loss per step."""
     x_mean, x_std = feature_scale(cfg, r, v)
+    if cnn.motion_features:  # the odd velocity estimates are 0 when nothing moves, so is their offset
+        x_mean[:2] = 0.0
     cnn.aux_mean.copy_(x_mean), cnn.aux_std.copy_(x_std)
     opt = torch.optim.Adam(cnn.parameters(), lr=tcfg.lr)
     cnn.train()
@@ -172,7 +185,7 @@ def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, 
     for _ in tqdm(range(steps), desc="stage 1: visual state estimation", disable=not progress):
         img, X = _estimation_batch(vision, cfg, r, v, states, tcfg, gen, synthetic_share)
         target = (X - x_mean) / x_std
-        loss = nnf.l1_loss(cnn.aux(cnn(img.flatten(0, 1))), target.flatten(0, 1))
+        loss = nnf.l1_loss(cnn.aux_standardized(cnn(img.flatten(0, 1))), target.flatten(0, 1))
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
@@ -194,7 +207,7 @@ def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, ep
     out = {}
     for t in times:
         e, tt = torch.arange(episodes), torch.full((episodes,), t)
-        pred = cnn.aux(cnn(stored_images(vision, cfg, traj.r, traj.v, e, tt).flatten(0, 1)))
+        pred = cnn.aux_standardized(cnn(stored_images(vision, cfg, traj.r, traj.v, e, tt).flatten(0, 1)))
         X = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
         out[t] = [torch.corrcoef(torch.stack((pred[:, k], X[:, k])))[0, 1].item() for k in range(6)]
     return out
@@ -205,7 +218,7 @@ def stage1_identity(cfg: FlockConfig, tcfg: VGAITrainConfig) -> dict:
     the very same stage-1 CNN, and share it through the cache."""
     t = tcfg.to_dict()
     fields = ("F", "cnn_widths", "cnn_hidden", "vision", "expert_episodes", "warm_steps", "warm_states",
-              "lr", "early_steps", "early_share", "seed", "synthetic_share")
+              "lr", "early_steps", "early_share", "seed", "synthetic_share", "motion_features")
     return {"config": cfg.to_dict(), "train": {k: t[k] for k in fields if k in t}}
 
 
@@ -363,11 +376,11 @@ def _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cac
 
 def train_state_estimator(cfg: FlockConfig, vision: VisionConfig, steps: int = 3000, states: int = 8,
                           F: int = 24, episodes: int = 40, seed: int = 0, progress: bool = True,
-                          synthetic_share: float = 0.0):
+                          synthetic_share: float = 0.0, motion_features: int = 0):
     """Fly ``episodes`` expert episodes, then train a fresh VisualCNN to estimate the exact local
     features from images (stage 1 of VGAI's training, on its own; notebook 05).
     Returns (cnn, losses, seconds)."""
-    tcfg = VGAITrainConfig(F=F, vision=vision, seed=seed)
+    tcfg = VGAITrainConfig(F=F, vision=vision, seed=seed, motion_features=motion_features)
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         gen = torch.Generator().manual_seed(seed)

@@ -1,0 +1,59 @@
+"""Experiment (issue 13): one VGAI training recipe, trained and judged as a user would.
+
+    python tools/experiments/vgai_variant.py --name odd8_synth0.5 --motion-features 8 --synthetic-share 0.5
+
+Trains the book's default VGAI (``runs.VGAI_RUNS["vgai_F24"]``) with the given changes, then writes
+``data/experiments/NAME.json``: the relative cost on 50 held-out episodes (seed EVAL_SEED) with the
+safety figures, and the flocking figures (velocity variance at 0.5-5 s, connectivity at 5 s) on 10
+held-out 500-step flights. The checkpoint goes to ``data/experiments/NAME.pt`` (not a shipped
+model), so a record and its controller can be checked against each other.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+import torch
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from vgai_lite import FlockConfig, consensus, relative_cost, train_vgai  # noqa: E402
+from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
+from vgai_lite.runs import VGAI_RUNS  # noqa: E402
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--name", required=True, help="names data/experiments/NAME.pt and NAME.json")
+    p.add_argument("--base", default="vgai_F24", choices=sorted(VGAI_RUNS))
+    p.add_argument("--motion-features", type=int, default=None)
+    p.add_argument("--synthetic-share", type=float, default=None)
+    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--threads", type=int, default=2)
+    args = p.parse_args(argv)
+    torch.set_num_threads(args.threads)
+    changes = {k: v for k, v in (("motion_features", args.motion_features),
+                                 ("synthetic_share", args.synthetic_share), ("seed", args.seed)) if v is not None}
+    cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
+    folder = DATA_DIR / "experiments"
+    controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False)
+    start = time.perf_counter()
+    res = relative_cost(controller, cfg, episodes=50, seed=EVAL_SEED, name=args.name)
+    flock = consensus(controller, cfg, episodes=10, name=args.name)
+    print(res), print(flock)
+    out = {"command": " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:])),
+           "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
+           "train_seconds": round(hist["seconds"], 1), "evaluation_seconds": round(time.perf_counter() - start, 1),
+           "validation": hist["rounds"], **res.summary(), "consensus": flock.summary()}
+    (folder / f"{args.name}.json").write_text(json.dumps(out, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
