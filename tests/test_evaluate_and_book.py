@@ -29,6 +29,27 @@ def test_local_heuristic_is_worse_than_the_centralized_expert():
     assert "relative cost" in str(res)
 
 
+def test_relative_cost_says_whether_it_flocked_without_changing_the_cost():
+    """The flocking figures come from the same flights flown on to 5 s; the cost and closest
+    approaches stay those of the paper's T-step episode. The expert aligns every velocity; the
+    local heuristic at R = 1.5 m leaves disagreements and splits the swarm."""
+    cfg = FlockConfig(N=20, T=60)
+    with_flock = relative_cost(LocalController(cfg), cfg, episodes=4, seed=3)
+    without = relative_cost(LocalController(cfg), cfg, episodes=4, seed=3, flock_times=())
+    assert torch.equal(with_flock.cost, without.cost) and without.flocking is None
+    assert torch.equal(with_flock.safety.min_distance, without.safety.min_distance)
+    f = with_flock.flocking
+    assert f.times == (2.0, 5.0) and f.variance.shape == (4, 2) and f.groups_at_end.shape == (4,)
+    s = with_flock.summary()
+    assert set(s["velocity_variance_median"]) == {"2s", "5s"} and 0 <= s["share_connected_at_end"] <= 1
+    assert "velocity variance" in str(with_flock)
+    expert = relative_cost(ExpertController(cfg), cfg, episodes=4, seed=3).flocking
+    assert expert.median_variance()[5.0] < 1e-6 and expert.share_connected == 1.0
+    assert f.median_variance()[5.0] > 100 * expert.median_variance()[5.0]
+    with pytest.raises(ValueError, match="flock_times"):
+        relative_cost(LocalController(cfg), cfg, episodes=2, flock_times=(-1.0,))
+
+
 def test_relative_cost_uses_the_same_initial_conditions_for_a_seed():
     cfg = FlockConfig(N=20, T=40)
     a = relative_cost(LocalController(cfg), cfg, episodes=4, seed=3)

@@ -202,7 +202,7 @@ def test_state_estimator_files_round_trip(tmp_path):
 
 
 def test_synthetic_velocities_span_the_disagreements_late_and_early_flights_have():
-    from vgai_lite.vgai_training import SYNTHETIC_SPEEDS, synthetic_velocities
+    from vgai_lite.state_estimation import SYNTHETIC_SPEEDS, synthetic_velocities
 
     v = torch.zeros(400, 30, 2) + torch.tensor([2.0, -1.0])
     vs = synthetic_velocities(v, torch.Generator().manual_seed(0))

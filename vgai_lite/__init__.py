@@ -6,17 +6,18 @@ pipeline, one idea each; data flow one way, top to bottom (nothing imports a mod
 this list):
 
   the problem      ``config`` (constants), ``flocking`` (dynamics, initial conditions, cost eq. 1,
-                   rollouts), ``controllers`` (expert eqs. 2-3, local heuristic), ``evaluate``
-                   (relative cost and close calls)
+                   rollouts), ``controllers`` (expert eqs. 2-3, local heuristic)
   communication    ``graphs`` (who hears whom, S(t)), ``consensus`` (did it flock: velocity
-                   variance late in a flight, cohesion), ``features`` (the DAGNN's 6 exact local
+                   variance late in a flight, cohesion), ``evaluate`` (relative cost, close calls
+                   and the flocking figures beside it), ``features`` (the DAGNN's 6 exact local
                    features), ``aggregation`` (Z(t), eq. 6)
   what drones see  ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference),
                    ``vision`` (the CNN's input: frames, motion, one image pipeline)
   learning         ``models`` (the networks: AggregationMLP eqs. 7-8, VisualCNN), ``learned_controllers``
                    (DAGNNController, VGAIController), ``checkpoints`` (files), ``imitation`` (DAgger,
-                   what both trainings share), ``dagnn_training``, ``vgai_training`` (three stages,
-                   K-step BPTT), ``runs`` (the book's shipped models by name)
+                   what both trainings share), ``dagnn_training``, ``vgai_config`` (what defines a VGAI
+                   run), ``state_estimation`` (stage 1: the CNN taught the local features),
+                   ``vgai_training`` (three stages, K-step BPTT), ``runs`` (the book's shipped models by name)
   the paper's tables  ``paper`` (its numbers), ``table_cells``, ``reproduce``
   the book         ``book`` (quick mode, data paths, seeds), ``viz``, ``viz3d``, ``exercises``,
                    ``course``, ``benchmark``
@@ -42,7 +43,9 @@ from .learned_controllers import DAGNNController, VGAIController
 from .models import AggregationMLP, VGAIModel, VisualCNN
 from .render import RenderConfig, render_egocentric, render_topdown
 from .runs import book_dagnn, book_estimator, book_vgai
-from .vgai_training import VGAITrainConfig, bptt_loss, train_state_estimator, train_vgai
+from .state_estimation import train_state_estimator
+from .vgai_config import VGAITrainConfig
+from .vgai_training import bptt_loss, train_vgai
 from .vision import VisionConfig, camera_input
 
 __version__ = "0.1.0"

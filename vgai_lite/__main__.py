@@ -151,7 +151,7 @@ def cmd_train_dagnn(args, extra):
 def cmd_train_vgai(args, extra):
     import torch
 
-    from .runs import ESTIMATOR_RUNS, VGAI_RUNS, book_estimator, book_vgai
+    from .runs import ESTIMATOR_RUNS, VGAI_RUNS, VGAI_SEED_RUNS, book_estimator, book_vgai, choose_seed
 
     torch.set_num_threads(args.threads)
     if args.estimators:
@@ -160,12 +160,20 @@ def cmd_train_vgai(args, extra):
             print(f"{name}: trained in {meta['seconds']:.0f} s; correlation with the exact features by step:")
             for t, q in meta["quality"].items():
                 print(f"  t = {t:>3}: " + " ".join(f"{x:5.2f}" for x in q))
-    for name in args.names:
+    names = list(args.names) + (sorted(VGAI_SEED_RUNS) if args.seeds else [])
+    for name in names:
         controller, result = book_vgai(name, retrain=args.retrain, episodes=args.episodes, write_json=True)
         print(result)
-        print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote data/vgai/{name}.pt and .json")
-    if not args.names and not args.estimators:
-        raise SystemExit(f"name a run ({sorted(VGAI_RUNS)}) or --estimators")
+        where = "data/vgai/seeds" if name in VGAI_SEED_RUNS else "data/vgai"
+        print(f"  trained in {controller.meta['history']['seconds']:.0f} s; wrote {where}/{name}.pt and .json")
+    if args.choose:
+        record = choose_seed()
+        for name, c in record["candidates"].items():
+            print(f"{name}: selection relative cost {c['relative_cost_mean']:.2f}, velocity variance "
+                  f"{c['velocity_variance_median']}, connected {c['share_connected_at_end']:.0%}")
+        print(f"chosen: {record['chosen']} -> data/vgai/vgai_F24.pt (set runs.VGAI_F24_SEED = {record['chosen_seed']})")
+    if not names and not args.estimators and not args.choose:
+        raise SystemExit(f"name a run ({sorted(VGAI_RUNS)}), or --seeds, --choose or --estimators")
 
 
 def cmd_student_copies(args, extra):
@@ -260,6 +268,9 @@ def main(argv=None):
     p = sub.add_parser("train-vgai", help="train (or load) the book's VGAI and state estimators, write data/vgai/")
     p.add_argument("names", nargs="*", help="VGAI runs to train, e.g. vgai_F24")
     p.add_argument("--estimators", action="store_true", help="the single- and two-frame state estimators")
+    p.add_argument("--seeds", action="store_true", help="the default VGAI's three training seeds (data/vgai/seeds/)")
+    p.add_argument("--choose", action="store_true",
+                   help="pick vgai_F24 among the seeds on the selection episodes (data/vgai/seeds/choice.json)")
     p.add_argument("--retrain", action="store_true")
     p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
     p.add_argument("--threads", type=int, default=2)

@@ -21,7 +21,9 @@ from .imitation import EpisodeStore
 from .learned_controllers import VGAIController
 from .physics import raycast_depth
 from .render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
-from .vgai_training import VGAITrainConfig, bptt_loss, fit_state_estimator
+from .state_estimation import fit_state_estimator
+from .vgai_config import VGAITrainConfig
+from .vgai_training import bptt_loss
 
 
 def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
@@ -132,7 +134,7 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     model.eval()
     learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
     start = time.perf_counter()
-    relative_cost(learner, cfg, episodes=episodes, seed=0)
+    relative_cost(learner, cfg, episodes=episodes, seed=0, flock_times=())  # as validation flies
     episode = (time.perf_counter() - start) / episodes  # the learner and the expert flying one episode
     flights = tcfg.expert_episodes * collect_expert + tcfg.dagger_rounds * tcfg.episodes_per_round * episode
     validation = (tcfg.dagger_rounds + 1) * 10 * episode

@@ -39,3 +39,8 @@ DATA_DIR = ROOT / "data"
 EVAL_SEED = 2020
 """Seed of the held-out initial conditions every evaluation in the book uses; training never
 draws from it (training seeds start at 0 and stay below 1000)."""
+
+SELECTION_SEED = 3000
+"""Seed of the validation episodes on which the book picks one of several trainings of a
+configuration (``runs.choose_seed``): neither the evaluation seed nor any training or per-round
+validation seed (seed + 1000)."""

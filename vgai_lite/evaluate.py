@@ -1,7 +1,10 @@
-"""The relative cost used in every table of the paper, with the safety figures eq. 1 ignores.
+"""The relative cost used in every table of the paper, with the figures eq. 1 hides beside it.
 
 Introduced in notebook 01. "Relative cost" is a controller's flocking cost (eq. 1) divided by the
 centralized expert's cost on the same initial conditions (paper, section 4: centralized = 1.00).
+Beside it, judged as a user would: whether it was safe (closest approaches, close calls) and
+whether it flocked (``consensus``: the velocity variance at 2 s, the episode's end, and at 5 s of
+the same flights flown on, and whether the communication graph is still connected at 5 s).
 """
 
 from __future__ import annotations
@@ -12,10 +15,15 @@ from typing import Callable, Optional
 import torch
 
 from .config import FlockConfig
+from .consensus import Consensus, groups, velocity_variance
 from .controllers import ExpertController
-from .flocking import rollout, sample_initial_state
+from .flocking import flocking_cost, rollout, sample_initial_state
 
 CLOSE_CALLS = (0.05, 0.1)  # m: a pair closer than this counts as a close call
+FLOCK_TIMES = (2.0, 5.0)
+"""Seconds at which ``relative_cost`` reads the velocity variance: 2 s (the end of the paper-length
+episode, T = 200 steps) and 5 s (the same flights flown on: a longer horizon exposes disagreements
+that eq. 1, mostly spent in the first steps, hides)."""
 
 
 @dataclass
@@ -44,6 +52,8 @@ class RelativeCost:
         median_ratio: median over episodes of cost / expert_cost.
         ratio_quartiles: 25th and 75th percentiles of the per-episode ratios.
         mean_ratio_ci: 95 % bootstrap interval of ``mean_ratio`` over episodes (2,000 resamples).
+        flocking: did it flock (velocity variance at ``FLOCK_TIMES``, groups at the last of them);
+            None when evaluated without (``flock_times=()``).
     """
 
     name: str
@@ -53,6 +63,7 @@ class RelativeCost:
     expert_cost: torch.Tensor
     safety: SafetyFigures
     expert_safety: SafetyFigures
+    flocking: Optional[Consensus] = None
     mean_ratio: float = field(init=False)
     median_ratio: float = field(init=False)
     ratio_quartiles: tuple = field(init=False)
@@ -83,7 +94,20 @@ class RelativeCost:
             out[f"{label}median_min_distance"] = round(s.median_min_distance, 4)
             for th in CLOSE_CALLS:
                 out[f"{label}share_below_{th}m"] = round(s.share_below(th), 4)
+        if self.flocking is not None:
+            f = self.flocking.summary()
+            out["velocity_variance_median"] = f["median_velocity_variance"]
+            out["share_connected_at_end"] = f["share_connected_at_end"]
+            out["flocking_horizon_s"] = max(self.flocking.times)
         return out
+
+    def flocked(self) -> str:
+        """One line: velocity variance at each time read, and the share of connected swarms."""
+        if self.flocking is None:
+            return "flocking figures not computed"
+        var = ", ".join(f"{x:.1e} at {t:g} s" for t, x in self.flocking.median_variance().items())
+        return (f"median velocity variance {var} [m²/s²]; communication graph connected at "
+                f"{max(self.flocking.times):g} s in {self.flocking.share_connected:.0%} of episodes")
 
     def __str__(self) -> str:
         lo, hi = self.mean_ratio_ci
@@ -94,33 +118,43 @@ class RelativeCost:
                 f"episodes (seed {self.seed}); median min distance {s.median_min_distance:.3f} m "
                 f"(expert {e.median_min_distance:.3f} m); episodes with a pair < 0.05 m: "
                 f"{s.share_below(0.05):.0%} (expert {e.share_below(0.05):.0%}), < 0.1 m: "
-                f"{s.share_below(0.1):.0%} (expert {e.share_below(0.1):.0%})")
+                f"{s.share_below(0.1):.0%} (expert {e.share_below(0.1):.0%})"
+                + ("" if self.flocking is None else f"; {self.flocked()}"))
 
 
 def relative_cost(controller: Callable, cfg: FlockConfig, episodes: int = 50, seed: int = 0,
                   batch: int = 64, device=None, dtype: torch.dtype = torch.float32,
-                  name: Optional[str] = None) -> RelativeCost:
+                  name: Optional[str] = None, flock_times: tuple = FLOCK_TIMES) -> RelativeCost:
     """Evaluate ``controller`` against the centralized expert on ``episodes`` initial conditions.
 
     The initial conditions come from ``sample_initial_state`` with ``torch.Generator`` seeded by
     ``seed``: the same seed gives the same episodes for every controller. Episodes run ``batch`` at
-    a time (the controller is reset for each batch); each runs ``cfg.T`` steps.
+    a time (the controller is reset for each batch). The cost of eq. 1 and the closest approaches
+    are those of the paper's episode, ``cfg.T`` steps; the controller's flights go on to the last
+    of ``flock_times`` (seconds), where its flocking figures are read (``()``: none, T steps only).
     """
     if not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive integer, got {episodes!r}")
+    if any(not t >= 0 for t in flock_times):
+        raise ValueError(f"flock_times must be seconds >= 0, got {flock_times!r}")
+    read = [int(round(t / cfg.Ts)) for t in flock_times]
+    steps = max([cfg.T] + [k + 1 for k in read])
     g = torch.Generator().manual_seed(seed)
     r0, v0 = sample_initial_state(cfg, episodes, g, dtype=dtype, device=device)
     expert = ExpertController(cfg)
-    cost, ecost, dmin, edmin = [], [], [], []
+    cost, ecost, dmin, edmin, var, grp = [], [], [], [], [], []
     for start in range(0, episodes, batch):
         r, v = r0[start:start + batch], v0[start:start + batch]
         te = rollout(expert, cfg, r, v)
-        tc = rollout(controller, cfg, r, v)
-        ecost.append(te.cost), cost.append(tc.cost)
-        edmin.append(te.min_distance.min(0).values), dmin.append(tc.min_distance.min(0).values)
+        tc = rollout(controller, cfg, r, v, steps=steps)
+        ecost.append(te.cost), cost.append(flocking_cost(tc.v[:cfg.T]))
+        edmin.append(te.min_distance.min(0).values), dmin.append(tc.min_distance[:cfg.T].min(0).values)
+        if read:
+            var.append(velocity_variance(tc.v)[read].T.cpu()), grp.append(groups(tc.r[-1], cfg.R))
     name = name or getattr(controller, "name", None) or getattr(controller, "__name__", None) \
         or type(controller).__name__
+    flocking = Consensus(name, tuple(flock_times), torch.cat(var), torch.cat(grp)) if read else None
     return RelativeCost(name=name, episodes=episodes, seed=seed,
                         cost=torch.cat(cost).cpu(), expert_cost=torch.cat(ecost).cpu(),
                         safety=SafetyFigures(torch.cat(dmin).cpu()),
-                        expert_safety=SafetyFigures(torch.cat(edmin).cpu()))
+                        expert_safety=SafetyFigures(torch.cat(edmin).cpu()), flocking=flocking)

@@ -47,7 +47,7 @@ from .config import FlockConfig
 from .dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
 from .table_cells import ModelSpec, evaluate_cell, model_path
-from .vgai_training import VGAITrainConfig
+from .vgai_config import VGAITrainConfig
 
 @dataclass(frozen=True)
 class ReproduceConfig:
@@ -243,6 +243,11 @@ def _aggregate(records: list[dict]) -> dict:
            "expert_median_min_distance": first["expert_median_min_distance"],
            "expert_share_below_0.05m": first["expert_share_below_0.05m"],
            "cells": [r["key"] for r in records]}
+    if all("velocity_variance_median" in r for r in records):  # did it flock: median over training seeds
+        times = list(first["velocity_variance_median"])
+        out["velocity_variance_median"] = {
+            t: float(torch.tensor([r["velocity_variance_median"][t] for r in records]).median()) for t in times}
+        out["share_connected_at_end"] = float(torch.tensor([r["share_connected_at_end"] for r in records]).median())
     return out
 
 
@@ -267,7 +272,10 @@ def _tables(rc: ReproduceConfig, tables: list[str], records: dict) -> tuple[dict
                                  "ci95_high": (agg["ci95"] or [None, None])[1],
                                  "seed_std": agg["seed_std"], "seeds": len(agg["per_seed"]),
                                  "episodes": agg["episodes"], "min_distance": agg["min_distance"],
-                                 "share_below_0.05m": agg["share_below_0.05m"], "paper": agg["paper"]})
+                                 "share_below_0.05m": agg["share_below_0.05m"],
+                                 "velocity_variance_2s": agg.get("velocity_variance_median", {}).get("2s"),
+                                 "velocity_variance_5s": agg.get("velocity_variance_median", {}).get("5s"),
+                                 "share_connected_5s": agg.get("share_connected_at_end"), "paper": agg["paper"]})
             entry["rows"][row] = cells
         out[table] = entry
     return out, rows_csv

@@ -4,7 +4,7 @@ Introduced in notebook 07. A cell is one (controller, flight configuration, epis
 result is written to ``OUT/cells/KEY.json`` (KEY: ``checkpoints.config_hash`` of everything that
 defines it) before the next starts, so an interrupted run resumes where it stopped and a cell shared
 by several tables is computed once. Trained models are reused: the book's shipped checkpoints
-(``runs.DAGNN_RUNS``, ``runs.VGAI_RUNS``) when the configuration is the same, otherwise
+(``runs.DAGNN_RUNS``, ``runs.VGAI_RUNS``, ``runs.VGAI_SEED_RUNS``) when the configuration is the same, otherwise
 ``OUT/models/``; VGAI runs that differ only in K share their first stage through ``OUT/stage1/``.
 """
 
@@ -23,7 +23,7 @@ from .controllers import LocalController
 from .dagnn_training import train_dagnn
 from .evaluate import relative_cost
 from .imitation import load_or_train
-from .runs import DAGNN_RUNS, VGAI_RUNS
+from .runs import DAGNN_RUNS, VGAI_RUNS, VGAI_SEED_RUNS
 from .vgai_training import train_vgai
 
 
@@ -44,18 +44,16 @@ class ModelSpec:
         return config_hash(self.identity())
 
 
-def _hash(obj) -> str:
-    return hashlib.sha1(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:12]
-
-
 def _shipped_path(spec: ModelSpec) -> Optional[Path]:
     """The book's checkpoint for ``spec`` when it ships one with exactly this configuration."""
     if spec.cfg != FlockConfig():
         return None
-    runs, folder = (DAGNN_RUNS, "dagnn") if spec.kind == "dagnn" else (VGAI_RUNS, "vgai")
-    for name, t in runs.items():
-        if t == spec.tcfg:
-            return DATA_DIR / folder / f"{name}.pt"
+    shelves = ([(DAGNN_RUNS, "dagnn")] if spec.kind == "dagnn"
+               else [(VGAI_RUNS, "vgai"), (VGAI_SEED_RUNS, "vgai/seeds")])
+    for runs, folder in shelves:
+        for name, t in runs.items():
+            if t == spec.tcfg:
+                return DATA_DIR / folder / f"{name}.pt"
     return None
 
 

@@ -5,7 +5,7 @@ VGAI's own late flight still has, and does training it on synthetic relative vel
 
 Trains two stand-alone estimators exactly like stage 1 of the book's VGAI (expert flights, 3,000
 steps, seed 0): as shipped, and with half of the training states shown with synthetic velocities
-(``vgai_training.synthetic_velocities``). Each is probed along flights of the shipped VGAI
+(``state_estimation.synthetic_velocities``). Each is probed along flights of the shipped VGAI
 (``data/vgai/vgai_F24.pt``) from the book's held-out initial conditions: correlation of each of the
 6 estimated local features with the exact ones, at t = 20, 60, 120, 190, with the median speed of
 the drones relative to the swarm's mean velocity at those steps.
@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, load_controller, rollout, sample_initial_state  # noqa: E402
 from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
-from vgai_lite.vgai_training import estimator_quality, train_state_estimator  # noqa: E402
+from vgai_lite.state_estimation import estimator_quality, train_state_estimator  # noqa: E402
 from vgai_lite.vision import VisionConfig  # noqa: E402
 
 TIMES = (20, 60, 120, 190)

@@ -34,12 +34,16 @@ def main(argv=None) -> int:
     p.add_argument("--base", default="vgai_F24", choices=sorted(VGAI_RUNS))
     p.add_argument("--motion-features", type=int, default=None)
     p.add_argument("--synthetic-share", type=float, default=None)
+    p.add_argument("--aux-weight", type=float, default=None)
+    p.add_argument("--early-share", type=float, default=None)
+    p.add_argument("--dagger-rounds", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--threads", type=int, default=2)
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
-    changes = {k: v for k, v in (("motion_features", args.motion_features),
-                                 ("synthetic_share", args.synthetic_share), ("seed", args.seed)) if v is not None}
+    changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
+                                 ("aux_weight", args.aux_weight), ("early_share", args.early_share),
+                                 ("dagger_rounds", args.dagger_rounds), ("seed", args.seed)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
     folder = DATA_DIR / "experiments"
     controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False)

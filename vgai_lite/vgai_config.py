@@ -1,0 +1,100 @@
+"""What defines a VGAI training run: ``VGAITrainConfig``, every knob of ``vgai_training`` in one place.
+
+Introduced in notebook 06. The paper gives the loss (L1, eq. 10), the optimiser (Adam, learning
+rate 1e-3) and DAgger's probability (0.33); every other field is our choice, explained beside it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+from .config import config_dict
+from .graphs import DEFAULT_GSO
+from .models import AggregationMLP, VGAIModel, VisualCNN
+from .vision import VisionConfig
+
+
+@dataclass(frozen=True)
+class VGAITrainConfig:
+    """Everything that defines a VGAI training run.
+
+    Attributes:
+        F, K, hidden, gso: features per agent (paper default 24), taps (K - 1 = 3 exchanges),
+            MLP hidden widths, graph shift operator.
+        cnn_widths, cnn_hidden: channels of the CNN's two stages, width of its hidden FC layer.
+        vision: what the agents see (view, resolution, motion frames).
+        expert_episodes: episodes of round 0, flown by the expert alone.
+        dagger_rounds, episodes_per_round, p_learner: DAgger rounds after the warm starts, new
+            episodes per round, probability of following the learner at each step (paper: 0.33).
+        warm_steps, warm_states: stage 1, gradient steps and swarm states (x N agents' images) per step.
+        mlp_epochs: stage 2, passes over the frozen-CNN dataset.
+        joint_steps, windows: stage 3, gradient steps per DAgger round and K-step windows per step.
+        lr: Adam's learning rate (paper: 1e-3).
+        early_steps, early_share: sampled states and window ends fall in the first ``early_steps``
+            steps with probability ``early_share`` (the expert's labels live early).
+        seed: seed of the training initial conditions, sampling and weights.
+        synthetic_share: stage 1 shows this share of its states with synthetic velocities
+            (``synthetic_velocities``; experimental, 0 in the book's runs so far). Stored by
+            ``to_dict`` only when not 0: files written before the field existed had none, so the
+            shipped checkpoints and table cells keep their identity.
+        motion_features: F_m, the CNN's features made odd in the motion channels (``VisualCNN``;
+            0: the plain CNN). Needs the "difference" motion mode. Stored like ``synthetic_share``.
+        aux_weight: stage 3 adds this times the state-estimation loss of stage 1 (the aux head on
+            every image of the window against the exact local features), so that joint training
+            keeps the CNN's features readable as the swarm's relative velocities (0: the action
+            loss alone, eq. 10). Stored like ``synthetic_share``.
+    """
+
+    F: int = 24
+    K: int = 4
+    hidden: tuple = (64, 64)
+    gso: str = DEFAULT_GSO
+    cnn_widths: tuple = (8, 16)
+    cnn_hidden: int = 64
+    vision: VisionConfig = VisionConfig()
+    expert_episodes: int = 40
+    dagger_rounds: int = 4
+    episodes_per_round: int = 16
+    p_learner: float = 0.33
+    warm_steps: int = 3000
+    warm_states: int = 8
+    mlp_epochs: int = 4
+    joint_steps: int = 600
+    windows: int = 4
+    lr: float = 1e-3
+    early_steps: int = 50
+    early_share: float = 0.75
+    seed: int = 0
+    synthetic_share: float = 0.0
+    motion_features: int = 0
+    aux_weight: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.synthetic_share <= 1.0:
+            raise ValueError(f"VGAITrainConfig: synthetic_share must be in [0, 1], got {self.synthetic_share!r}")
+        if self.motion_features and (self.vision.motion_gap == 0 or self.vision.motion_mode != "difference"):
+            raise ValueError("VGAITrainConfig: motion_features needs a motion frame in the 'difference' mode "
+                             f"(got motion_gap={self.vision.motion_gap}, motion_mode={self.vision.motion_mode!r})")
+
+    def to_dict(self) -> dict:
+        d = config_dict(self)
+        for optional in ("synthetic_share", "motion_features", "aux_weight"):  # absent from older files
+            if d[optional] == 0:
+                del d[optional]
+        return d
+
+    def new_model(self) -> VGAIModel:
+        """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""
+        C, H, W = self.vision.image_shape()
+        return VGAIModel(VisualCNN(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
+                         AggregationMLP(self.K, self.F, self.hidden))
+
+
+def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> torch.Tensor:
+    """n time steps in [0, T): in the first ``early_steps`` with probability ``early_share``, else uniform."""
+    early = torch.rand(n, generator=g) < tcfg.early_share
+    t_early = torch.randint(0, min(tcfg.early_steps, T), (n,), generator=g)
+    t_any = torch.randint(0, T, (n,), generator=g)
+    return torch.where(early, t_early, t_any)
