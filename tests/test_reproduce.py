@@ -8,8 +8,8 @@ import pytest
 
 from vgai_lite.book import DATA_DIR
 from vgai_lite.config import FlockConfig
-from vgai_lite.runs import VGAI_RUNS
-from vgai_lite.table_cells import _shipped_path
+from vgai_lite.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEEDS
+from vgai_lite.table_cells import ModelSpec, _shipped_path
 from vgai_lite.reproduce import (PAPER, TABLES, ReproduceConfig, flight_config, models_of, plan,
                                  run)
 
@@ -40,11 +40,17 @@ def test_every_column_flies_its_controllers_in_one_configuration():
 def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
     rc = ReproduceConfig()
     (vgai,) = models_of(rc, "F", "VGAI", 24)
-    assert _shipped_path(vgai) == DATA_DIR / "vgai" / "vgai_F24.pt"
+    assert _shipped_path(vgai) == (DATA_DIR / "vgai" / "vgai_F24.pt" if VGAI_F24_SEED == 0
+                                   else DATA_DIR / "vgai" / "seeds" / "vgai_F24_seed0.pt")
+    shipped = models_of(ReproduceConfig(vgai_seeds=VGAI_SEEDS), "F", "VGAI", 24)  # the shipped training seeds
+    assert all(_shipped_path(s) is not None for s in shipped)
     dagnn = models_of(rc, "K", "DAGNN", 2)
     assert [_shipped_path(s) for s in dagnn] == [DATA_DIR / "dagnn" / "dagnn_K3.pt", None, None]
     assert all(_shipped_path(s) is None for s in models_of(rc, "R", "DAGNN (retrained)", 1.0))
-    assert {_shipped_path(s).stem for s in (models_of(rc, "F", "VGAI", F)[0] for F in (6, 12))} <= set(VGAI_RUNS)
+    # F = 6, 12 ship with last round's plain recipe: found for it, while the default recipe trains anew
+    for name in ("vgai_F6", "vgai_F12", "vgai_K2", "vgai_K3"):
+        assert _shipped_path(ModelSpec("vgai", FlockConfig(), VGAI_RUNS[name])) == DATA_DIR / "vgai" / f"{name}.pt"
+    assert all(_shipped_path(models_of(rc, "F", "VGAI", F)[0]) is None for F in (6, 12))
     quick = ReproduceConfig(quick=True)
     assert _shipped_path(models_of(quick, "F", "VGAI", 24)[0]) is None
 
@@ -110,5 +116,5 @@ def test_extras_add_a_vgai_trained_at_each_radius_only_when_asked():
     assert sorted(retrained) == [1.0, 1.5, 2.0]
     for column, spec in retrained.items():
         assert spec.kind == "vgai" and spec.cfg.R == column
-    assert _shipped_path(retrained[1.5]) == DATA_DIR / "vgai" / "vgai_F24.pt"  # R = 1.5 is the default VGAI
+    assert _shipped_path(retrained[1.5]) == _shipped_path(models_of(ReproduceConfig(), "F", "VGAI", 24)[0])  # the default
     assert _shipped_path(retrained[2.0]) is None

@@ -249,3 +249,21 @@ def test_a_cnn_with_motion_features_round_trips_through_both_file_kinds(tmp_path
     r, v = sample_initial_state(CFG, 2, torch.Generator().manual_seed(0))
     c.reset(), c2.reset()
     torch.testing.assert_close(c2(r, v), c(r, v))
+
+
+def test_the_default_vgai_is_the_training_seed_the_selection_chose():
+    """data/vgai/vgai_F24.pt is one of the three shipped training seeds, the one with the lowest
+    relative cost on the selection episodes (never the evaluation seed), as runs.VGAI_F24_SEED says."""
+    import json
+
+    from vgai_lite.book import DATA_DIR, EVAL_SEED
+    from vgai_lite.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEED_RUNS
+
+    choice = json.loads((DATA_DIR / "vgai" / "seeds" / "choice.json").read_text())
+    assert choice["selection_seed"] != EVAL_SEED and set(choice["candidates"]) == set(VGAI_SEED_RUNS)
+    best = min(choice["candidates"], key=lambda n: choice["candidates"][n]["relative_cost_mean"])
+    assert choice["chosen"] == best and VGAI_SEED_RUNS[best].seed == VGAI_F24_SEED
+    assert VGAI_RUNS["vgai_F24"] == VGAI_SEED_RUNS[best]
+    shipped = torch.load(DATA_DIR / "vgai" / "vgai_F24.pt", weights_only=True)
+    chosen = torch.load(DATA_DIR / "vgai" / "seeds" / f"{best}.pt", weights_only=True)
+    assert all(torch.equal(shipped["state_dict"][k], chosen["state_dict"][k]) for k in chosen["state_dict"])

@@ -32,11 +32,25 @@ def _ci(rec: dict) -> str:
     return f"{rec['relative_cost_mean']:.2f} ({lo:.2f}-{hi:.2f})"
 
 
+def _flock(rec: dict) -> str:
+    """Did it flock: median velocity variance at 2 s / 5 s and the share connected at 5 s ("-" for a
+    record written before relative_cost gave them)."""
+    var = rec.get("velocity_variance_median")
+    if not var:
+        return "- | -"
+    return f"{var['2s']:.1e} / {var['5s']:.1e} | {rec['share_connected_at_end']:.0%}"
+
+
 def section() -> str:
     dagnn = {k: _load(f"data/dagnn/dagnn_K{k}.json") for k in (1, 2, 3, 4)}
     vgai = {n: _load(f"data/vgai/vgai_{n}.json") for n in ("F24", "F12", "F6", "K3", "K2")}
     results = _load("data/results/results.json")
-    local = results["tables"]["v_init"]["rows"]["Local"]["3.0"]
+    choice = _load("data/vgai/seeds/choice.json")
+    seed_recs = {n: _load(f"data/vgai/seeds/{n}.json") for n in choice["candidates"]}
+    mean_seeds = sum(r["relative_cost_mean"] for r in seed_recs.values()) / len(seed_recs)
+    alone = _load("data/experiments/vgai_odd8_synth0.5.json")
+    seeds_note = (f"training seed {choice['chosen_seed']} of {len(seed_recs)}, chosen on {choice['episodes']} "
+                  f"selection episodes; mean of the {len(seed_recs)} seeds {mean_seeds:.2f}")
     prov = results["provenance"]
     scratch = [i for i in prov.get("invocations", []) if i["retrain"]]
     eps = dagnn[4]["episodes"]
@@ -45,22 +59,24 @@ def section() -> str:
     def vg_minutes(rec):
         return (rec["train_seconds"] + (rec.get("stage1_seconds") or 0.0 if rec.get("stage1_cached") else 0.0)) / 60
 
+    local_rec = _load("data/local/local.json")
     rows = [
-        "| controller | relative cost (95% CI) | paper | command |",
-        "|---|---|---|---|",
-        f"| Local heuristic | {local['relative_cost_mean']:.2f} ({local['ci95'][0]:.2f}-{local['ci95'][1]:.2f}), "
-        f"{local['episodes']} episodes | {p['v_init']['Local'][3.0]:.2f} | `python -m vgai_lite reproduce --only v_init` |",
-        f"| DAGNN, K-1 = 3 | {_ci(dagnn[4])} | {p['K']['DAGNN'][3]:.2f} | "
-        "`python -m vgai_lite evaluate --controller data/dagnn/dagnn_K4.pt` |",
-        f"| DAGNN, K-1 = 0 / 1 / 2 | {dagnn[1]['relative_cost_mean']:.2f} / {dagnn[2]['relative_cost_mean']:.2f} / "
-        f"{dagnn[3]['relative_cost_mean']:.2f} | - / {p['K']['DAGNN'][1]:.2f} / {p['K']['DAGNN'][2]:.2f} | "
-        "`python -m vgai_lite train-dagnn dagnn_K1 dagnn_K2 dagnn_K3` |",
-        f"| VGAI, F = 24, K-1 = 3 (images only) | {_ci(vgai['F24'])} | {p['F']['VGAI'][24]:.2f} | "
-        "`python -m vgai_lite evaluate --controller data/vgai/vgai_F24.pt` |",
-        f"| VGAI, K-1 = 1 / 2, F = 24 | {_ci(vgai['K2'])} / {_ci(vgai['K3'])} | {p['K']['VGAI'][1]:.2f} / "
-        f"{p['K']['VGAI'][2]:.2f} | `python -m vgai_lite evaluate --controller data/vgai/vgai_K2.pt` (and `vgai_K3.pt`) |",
-        f"| VGAI, F = 6 / 12, K-1 = 3 | {_ci(vgai['F6'])} / {_ci(vgai['F12'])} | {p['F']['VGAI'][6]:.2f} / "
-        f"{p['F']['VGAI'][12]:.2f} | `python -m vgai_lite evaluate --controller data/vgai/vgai_F6.pt` (and `vgai_F12.pt`) |",
+        "| controller | relative cost (95% CI) | paper | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | command |",
+        "|---|---|---|---|---|---|",
+        f"| Local heuristic | {_ci(local_rec)} | {p['v_init']['Local'][3.0]:.2f} | {_flock(local_rec)} | "
+        "`python -m vgai_lite evaluate --controller local --json data/local/local.json` |",
+        f"| DAGNN, K-1 = 3 | {_ci(dagnn[4])} | {p['K']['DAGNN'][3]:.2f} | {_flock(dagnn[4])} | "
+        "`python -m vgai_lite train-dagnn dagnn_K4` |",
+        *[f"| DAGNN, K-1 = {k - 1} | {_ci(dagnn[k])} | {p['K']['DAGNN'].get(k - 1, '-')} | {_flock(dagnn[k])} | "
+          f"`python -m vgai_lite train-dagnn dagnn_K{k}` |" for k in (1, 2, 3)],
+        f"| VGAI, F = 24, K-1 = 3 (images only; {seeds_note}) | {_ci(vgai['F24'])} | {p['F']['VGAI'][24]:.2f} | "
+        f"{_flock(vgai['F24'])} | `python -m vgai_lite train-vgai vgai_F24` |",
+        *[f"| VGAI, F = 24, training seed {c['training_seed']} | {_ci(seed_recs[n])} | | {_flock(seed_recs[n])} | "
+          f"`python -m vgai_lite train-vgai --seeds` |" for n, c in choice["candidates"].items()],
+        *[f"| VGAI, {label} (last round's plain CNN) | {_ci(vgai[n])} | {paper:.2f} | {_flock(vgai[n])} | "
+          f"`python -m vgai_lite train-vgai vgai_{n}` |"
+          for n, label, paper in (("K2", "K-1 = 1", p['K']['VGAI'][1]), ("K3", "K-1 = 2", p['K']['VGAI'][2]),
+                                  ("F6", "F = 6", p['F']['VGAI'][6]), ("F12", "F = 12", p['F']['VGAI'][12]))],
     ]
     d4, v24 = dagnn[4], vgai["F24"]
     text = [
@@ -69,16 +85,25 @@ def section() -> str:
         "",
         *rows,
         "",
+        "Did it flock: the velocity variance (1/N) Σ‖v_i − v̄‖² (eq. 1's summand) at 2 s, the end of the paper's "
+        "episode, and at 5 s of the same flights flown on (median over the episodes), and the share of episodes whose "
+        "communication graph is still connected at 5 s. The rows marked "
+        "\"last round's plain CNN\" were trained before the recipe of notebook 06, section 6.",
+        "",
         f"Safety on the same episodes: episodes with a pair closer than 0.05 m: DAGNN {d4['share_below_0.05m']:.0%}, "
         f"VGAI {v24['share_below_0.05m']:.0%}, expert {d4['expert_share_below_0.05m']:.0%}; median closest approach "
         f"DAGNN {d4['median_min_distance']:.3f} m, VGAI {v24['median_min_distance']:.3f} m, expert "
         f"{d4['expert_median_min_distance']:.3f} m.",
         "",
-        f"Training time, each alone on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s; VGAI "
-        + ", ".join(f"{n} {vg_minutes(r):.1f} min" for n, r in vgai.items())
+        f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. The default "
+        f"VGAI's recipe {alone['train_seconds'] / 60:.0f} min alone (`data/experiments/vgai_odd8_synth0.5.json`: "
+        "the same recipe without the stage-3 state-estimation term, which adds one linear layer per image); "
+        f"the {len(seed_recs)} shipped training seeds " + " / ".join(f"{r['train_seconds'] / 60:.0f}" for r in seed_recs.values())
+        + " min as recorded, trained two at a time with one thread each. Last round's plain-CNN VGAIs, each alone: "
+        + ", ".join(f"{n} {vg_minutes(r):.1f} min" for n, r in vgai.items() if n != "F24")
         + " (K2 and K3 reuse the F24 run's first stage, whose time is counted in theirs)."
         + (f" The from-scratch reproduction of every table (`python -m vgai_lite reproduce --retrain --seeds 1`), "
-           f"which trained all of these, took {scratch[-1]['wall_seconds'] / 60:.0f} min." if scratch else ""),
+           f"which trained last round's VGAIs, took {scratch[-1]['wall_seconds'] / 60:.0f} min." if scratch else ""),
     ]
     return "\n".join([BEGIN, *text, END])
 

@@ -169,8 +169,7 @@ def cmd_train_vgai(args, extra):
     if args.choose:
         record = choose_seed()
         for name, c in record["candidates"].items():
-            print(f"{name}: selection relative cost {c['relative_cost_mean']:.2f}, velocity variance "
-                  f"{c['velocity_variance_median']}, connected {c['share_connected_at_end']:.0%}")
+            print(f"{name}: selection relative cost {c['relative_cost_mean']:.2f} on {c['episodes']} episodes")
         print(f"chosen: {record['chosen']} -> data/vgai/vgai_F24.pt (set runs.VGAI_F24_SEED = {record['chosen_seed']})")
     if not names and not args.estimators and not args.choose:
         raise SystemExit(f"name a run ({sorted(VGAI_RUNS)}), or --seeds, --choose or --estimators")

@@ -17,13 +17,13 @@ from pathlib import Path
 from typing import Optional, Union
 
 from .book import DATA_DIR, EVAL_SEED, SELECTION_SEED
-from .checkpoints import load_estimator, save_estimator
+from .checkpoints import is_finished_with, load_controller, load_estimator, save_estimator
 from .config import FlockConfig
 from .dagnn_training import DAGNNTrainConfig, train_dagnn
 from .evaluate import relative_cost
 from .imitation import load_or_train
 from .state_estimation import estimator_quality, train_state_estimator
-from .vgai_config import VGAITrainConfig
+from .vgai_config import PLAIN_RECIPE, VGAITrainConfig
 from .vgai_training import train_vgai
 from .vision import VisionConfig
 
@@ -39,9 +39,13 @@ DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
 }
 """The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name."""
 
-VGAI_SEED_RUNS: dict[str, VGAITrainConfig] = {f"vgai_F24_seed{s}": VGAITrainConfig(seed=s) for s in range(3)}
-"""Three trainings of the default VGAI that differ only in the training seed, in data/vgai/seeds/:
-how far apart trainings land, and the pool the book's vgai_F24 is chosen from (``choose_seed``)."""
+VGAI_SEEDS = 2
+"""Training seeds of the default VGAI the book ships (the issue asks for 3; the third did not fit in
+the session that trained these, two at a time with one thread each: about 45 minutes apiece)."""
+
+VGAI_SEED_RUNS: dict[str, VGAITrainConfig] = {f"vgai_F24_seed{s}": VGAITrainConfig(seed=s) for s in range(VGAI_SEEDS)}
+"""Trainings of the default VGAI that differ only in the training seed, in data/vgai/seeds/: how far
+apart trainings land, and the pool the book's vgai_F24 is chosen from (``choose_seed``)."""
 
 VGAI_F24_SEED = 0
 """The training seed of the book's vgai_F24: the one of VGAI_SEED_RUNS with the lowest relative cost
@@ -50,10 +54,12 @@ in data/vgai/seeds/choice.json by ``python -m vgai_lite train-vgai --choose`` (a
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
     "vgai_F24": VGAITrainConfig(seed=VGAI_F24_SEED),  # the paper's default: F = 24, K - 1 = 3, egocentric
-    "vgai_F6": VGAITrainConfig(F=6),     # Table 1a: as many features as the DAGNN's exact ones
-    "vgai_F12": VGAITrainConfig(F=12),   # Table 1a
-    "vgai_K2": VGAITrainConfig(K=2),     # Table 1b: K - 1 = 1 exchange
-    "vgai_K3": VGAITrainConfig(K=3),     # Table 1b: K - 1 = 2 exchanges
+    # Tables 1a and 1b, still last round's plain-CNN recipe (the consensus round retrained only the
+    # default; these are next, and `reproduce` trains them with the default recipe when asked):
+    "vgai_F6": VGAITrainConfig(F=6, **PLAIN_RECIPE),     # Table 1a: as many features as the DAGNN's
+    "vgai_F12": VGAITrainConfig(F=12, **PLAIN_RECIPE),   # Table 1a
+    "vgai_K2": VGAITrainConfig(K=2, **PLAIN_RECIPE),     # Table 1b: K - 1 = 1 exchange
+    "vgai_K3": VGAITrainConfig(K=3, **PLAIN_RECIPE),     # Table 1b: K - 1 = 2 exchanges
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
@@ -134,17 +140,22 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
     return cnn, vision, meta
 
 
-def choose_seed(episodes: int = 20, progress: bool = False) -> dict:
-    """Pick the book's vgai_F24 among the trainings of VGAI_SEED_RUNS (trained first if missing):
+def choose_seed(episodes: int = 20) -> dict:
+    """Pick the book's vgai_F24 among the trainings of VGAI_SEED_RUNS (``train-vgai --seeds``):
     the lowest relative cost on ``episodes`` selection episodes (seed SELECTION_SEED; never the
-    evaluation seed), with every candidate's flocking figures beside it. Copies the chosen
+    evaluation seed); each candidate's flocking figures are in its record. Copies the chosen
     checkpoint and its record to data/vgai/vgai_F24.pt / .json, writes data/vgai/seeds/choice.json,
     and returns that record. VGAI_F24_SEED must then name the chosen seed."""
     cfg, candidates = FlockConfig(), {}
     for name, tcfg in VGAI_SEED_RUNS.items():
-        controller, _ = book_vgai(name, episodes=episodes, progress=progress)
-        res = relative_cost(controller, cfg, episodes=episodes, seed=SELECTION_SEED, name=name)
-        candidates[name] = {"seed": tcfg.seed, **res.summary()}
+        path = DATA_DIR / "vgai" / "seeds" / f"{name}.pt"
+        if not is_finished_with(path, cfg, tcfg.to_dict()):
+            raise FileNotFoundError(f"{path} is missing or not a finished training of {name}: "
+                                    "run `python -m vgai_lite train-vgai --seeds` first")
+        controller = load_controller(path)
+        res = relative_cost(controller, cfg, episodes=episodes, seed=SELECTION_SEED, name=name,
+                            flock_times=())  # the rule reads the cost; the flocking figures are in each record
+        candidates[name] = {**res.summary(), "training_seed": tcfg.seed}  # "seed": the selection episodes
     best = min(candidates, key=lambda n: candidates[n]["relative_cost_mean"])
     folder = DATA_DIR / "vgai"
     for suffix in (".pt", ".json"):

@@ -69,8 +69,8 @@ def fit_state_estimator(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, 
     """Visual state estimation: train the CNN (through its ``aux`` head) to regress the standardised
     exact local features of every agent from its own images, on stored states r, v (T, E, N, 2).
     Each step draws ``states`` swarm states (all N agents' images). ``synthetic_share``: the share of
-    them shown with synthetic velocities (``synthetic_velocities``; experimental, off in the book's
-    runs). Returns the L1 loss per step."""
+    them shown with synthetic velocities (``synthetic_velocities``; ``VGAITrainConfig.synthetic_share``,
+    0.5 in the book's VGAI). Returns the L1 loss per step."""
     x_mean, x_std = feature_scale(cfg, r, v)
     if cnn.motion_features:  # the odd velocity estimates are 0 when nothing moves, so is their offset
         x_mean[:2] = 0.0

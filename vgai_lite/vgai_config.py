@@ -7,6 +7,7 @@ rate 1e-3) and DAgger's probability (0.33); every other field is our choice, exp
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import torch
 
@@ -14,6 +15,14 @@ from .config import config_dict
 from .graphs import DEFAULT_GSO
 from .models import AggregationMLP, VGAIModel, VisualCNN
 from .vision import VisionConfig
+
+
+OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight")
+"""Fields added in the consensus round (notebook 06, section 6); a stored config without them had 0."""
+
+PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0}
+"""The recipe of the book's first VGAIs (the paper's plain CNN, stage 1 on expert states only, the
+action loss alone in stage 3): ``VGAITrainConfig(F=6, **PLAIN_RECIPE)``."""
 
 
 @dataclass(frozen=True)
@@ -35,16 +44,23 @@ class VGAITrainConfig:
         early_steps, early_share: sampled states and window ends fall in the first ``early_steps``
             steps with probability ``early_share`` (the expert's labels live early).
         seed: seed of the training initial conditions, sampling and weights.
-        synthetic_share: stage 1 shows this share of its states with synthetic velocities
-            (``synthetic_velocities``; experimental, 0 in the book's runs so far). Stored by
-            ``to_dict`` only when not 0: files written before the field existed had none, so the
-            shipped checkpoints and table cells keep their identity.
-        motion_features: F_m, the CNN's features made odd in the motion channels (``VisualCNN``;
-            0: the plain CNN). Needs the "difference" motion mode. Stored like ``synthetic_share``.
+        synthetic_share: stage 1 shows this share of its states with synthetic relative velocities
+            (``state_estimation.synthetic_velocities``), from 0.01 to 1.5 m/s: the expert's own late
+            states have almost none to learn small motions from. Our choice: 0.5 (notebook 06,
+            section 6; 0 in the book's VGAIs before the consensus round).
+        motion_features: F_m, the CNN's last F_m features made odd in the motion channels
+            (``VisualCNN``): exactly 0 when nothing moves relative to the drone, so a swarm moving
+            as one reads as such. None (default): F // 3, the share of velocities among the 6 exact
+            features (2 of 6), when the CNN sees a motion frame in the "difference" mode (which an
+            explicit F_m > 0 needs), else 0; 0: the paper's plain CNN.
         aux_weight: stage 3 adds this times the state-estimation loss of stage 1 (the aux head on
             every image of the window against the exact local features), so that joint training
             keeps the CNN's features readable as the swarm's relative velocities (0: the action
-            loss alone, eq. 10). Stored like ``synthetic_share``.
+            loss alone, eq. 10). Our choice: 5, which makes the two terms of similar size at the
+            start of stage 3 (action L1 about 3 m/s², state-estimation L1 about 0.2, standardised).
+
+    The last three are stored by ``to_dict`` only when not 0: files written before they existed
+    had none (their meaning then: 0), so those checkpoints and table cells keep their identity.
     """
 
     F: int = 24
@@ -67,11 +83,14 @@ class VGAITrainConfig:
     early_steps: int = 50
     early_share: float = 0.75
     seed: int = 0
-    synthetic_share: float = 0.0
-    motion_features: int = 0
-    aux_weight: float = 0.0
+    synthetic_share: float = 0.5
+    motion_features: Optional[int] = None
+    aux_weight: float = 5.0
 
     def __post_init__(self) -> None:
+        if self.motion_features is None:  # frozen dataclass: resolve the default once, here
+            motion = self.vision.motion_gap > 0 and self.vision.motion_mode == "difference"
+            object.__setattr__(self, "motion_features", self.F // 3 if motion else 0)
         if not 0.0 <= self.synthetic_share <= 1.0:
             raise ValueError(f"VGAITrainConfig: synthetic_share must be in [0, 1], got {self.synthetic_share!r}")
         if self.motion_features and (self.vision.motion_gap == 0 or self.vision.motion_mode != "difference"):
@@ -80,10 +99,18 @@ class VGAITrainConfig:
 
     def to_dict(self) -> dict:
         d = config_dict(self)
-        for optional in ("synthetic_share", "motion_features", "aux_weight"):  # absent from older files
+        for optional in OPTIONAL_FIELDS:  # absent from older files
             if d[optional] == 0:
                 del d[optional]
         return d
+
+    @staticmethod
+    def from_dict(d: dict) -> "VGAITrainConfig":
+        """The inverse of ``to_dict`` (the optional fields, absent when 0, come back as 0)."""
+        d = {**{k: 0 for k in OPTIONAL_FIELDS}, **d}
+        d["vision"] = VisionConfig.from_dict(d["vision"])
+        d["hidden"], d["cnn_widths"] = tuple(d["hidden"]), tuple(d["cnn_widths"])
+        return VGAITrainConfig(**d)
 
     def new_model(self) -> VGAIModel:
         """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""

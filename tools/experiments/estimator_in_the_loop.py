@@ -9,7 +9,8 @@ notebook 05 (data/vgai/estimator_motion.pt, the plain CNN) and one whose velocit
 in the motion channels (``VisualCNN(motion_features=8)``) trained with half of its states shown
 with synthetic relative velocities (data/experiments/estimator_odd8_synth0.5.pt, trained here when
 missing, about 6 minutes). For each: the flocking figures (velocity variance at 0.5-5 s, 10 held-out
-500-step flights) and, along expert flights, the estimate of the velocity features where the truth
+500-step flights; for the odd estimator also the relative cost with safety and flocking figures on
+50 held-out episodes) and, along expert flights, the estimate of the velocity features where the truth
 is 0 (the swarm already aligned): the bias a plain CNN settles on.
 """
 
@@ -26,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from vgai_lite import (ExpertController, FlockConfig, consensus, load_controller, local_features,  # noqa: E402
-                       rollout, sample_initial_state)
+                       relative_cost, rollout, sample_initial_state)
 from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
 from vgai_lite.checkpoints import load_estimator, save_estimator  # noqa: E402
 from vgai_lite.learned_controllers import DAGNNController  # noqa: E402
@@ -116,6 +117,11 @@ def main(argv=None) -> int:
         flock = consensus(pilot, cfg, episodes=10, name=label)
         print(flock, flush=True)
         out["flights"][label] = flock.summary()
+    # the vision-only pilot that flocks, judged like every controller of the book (50 held-out episodes)
+    label = "DAGNN fed by the odd motion features, synthetic velocities"
+    res = relative_cost(pilots[label], cfg, episodes=50, seed=EVAL_SEED, name=label)
+    print(res, flush=True)
+    out["relative_cost"] = {label: res.summary()}
     print(json.dumps(out["bias_at_rest"], indent=1))
     if args.out:
         Path(args.out).write_text(json.dumps(out, indent=1) + "\n")

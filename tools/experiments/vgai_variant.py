@@ -7,6 +7,12 @@ Trains the book's default VGAI (``runs.VGAI_RUNS["vgai_F24"]``) with the given c
 safety figures, and the flocking figures (velocity variance at 0.5-5 s, connectivity at 5 s) on 10
 held-out 500-step flights. The checkpoint goes to ``data/experiments/NAME.pt`` (not a shipped
 model), so a record and its controller can be checked against each other.
+
+    python tools/experiments/vgai_variant.py --name vgai_F24_plain --evaluate data/experiments/vgai_F24_plain.pt
+
+writes the same record for a checkpoint trained before (its training time read from the checkpoint).
+``--note`` is stored in the record (e.g. that two trainings shared the two cores, so their
+training time is not the time of one alone).
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from vgai_lite import FlockConfig, consensus, relative_cost, train_vgai  # noqa: E402
+from vgai_lite import FlockConfig, VGAITrainConfig, consensus, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
 from vgai_lite.runs import VGAI_RUNS  # noqa: E402
 
@@ -39,6 +45,8 @@ def main(argv=None) -> int:
     p.add_argument("--dagger-rounds", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
+    p.add_argument("--note", default="")
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
     changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
@@ -46,13 +54,17 @@ def main(argv=None) -> int:
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
     folder = DATA_DIR / "experiments"
-    controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False)
+    if args.evaluate:
+        controller = load_controller(args.evaluate)
+        hist, tcfg = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
+    else:
+        controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False)
     start = time.perf_counter()
     res = relative_cost(controller, cfg, episodes=50, seed=EVAL_SEED, name=args.name)
     flock = consensus(controller, cfg, episodes=10, name=args.name)
     print(res), print(flock)
     out = {"command": " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:])),
-           "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
+           "note": args.note, "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
            "train_seconds": round(hist["seconds"], 1), "evaluation_seconds": round(time.perf_counter() - start, 1),
            "validation": hist["rounds"], **res.summary(), "consensus": flock.summary()}
     (folder / f"{args.name}.json").write_text(json.dumps(out, indent=1) + "\n")
