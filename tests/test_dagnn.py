@@ -1,4 +1,4 @@
-"""The DAGNN baseline (eqs. 7-11): locality, equivariance, any N, checkpoints, DAgger."""
+"""The DAGNN baseline (eqs. 7-10): locality, equivariance, any N, checkpoints, DAgger."""
 
 import pytest
 import torch

@@ -37,3 +37,108 @@ def test_readme_results_section_is_the_one_the_records_give():
     assert text.count(BEGIN) == 1 and text.count(END) == 1
     committed = BEGIN + text.split(BEGIN)[1].split(END)[0] + END
     assert committed == section(), "run `python tools/readme_results.py --write`"
+
+
+# Numbers that may stand in a markdown cell: definitions and arithmetic of the book's set-up, not
+# measurements (a measured number is rendered from computed values with ``vgai_lite.book.prose``).
+# Besides these: integers up to 12 (counts, section and equation numbers), years, every number of
+# the paper's tables (``vgai_lite.paper``) and every value of the config objects.
+DEFINED_NUMBERS = {
+    "360°": "the panorama's field of view",
+    "90°": "one camera's horizontal field of view",
+    "45°": "half a camera's field of view (the pinhole model)",
+    "90%": "the top of a 10-90 % band", "95%": "a bootstrap 95 % interval",
+    "100": "N' = 100 of Table 3 (ours); 100 steps per second at Ts = 0.01 s",
+    "128": "panorama columns: 4 cameras x 32",
+    "2048": "16 channels x 128 columns into the CNN's first fully connected layer",
+    "400": "8 swarm states x 50 agents' images per stage-1 step",
+    "800": "4 windows x 4 steps x 50 agents' images per stage-3 step",
+    "125": "1 / 0.2^3, the 1/r^4 feature of a neighbour at 0.2 m",
+    "7.07": "sqrt(50), the paper's disc radius taken literally",
+    "2.66": "50^(1/4), the reference code's disc radius",
+    "8.5": "6 sqrt(2), the largest closing speed of two drones at v_init = 3 m/s",
+    "2.8°": "360° / 128 columns",
+    "1e-9": "a test's tolerance",
+    "20": "the potential's push at rho = 0.5 m, 2 rho (1/rho^4 + 1/rho^2) m/s^2",
+}
+
+
+def _config_values() -> set:
+    import dataclasses
+
+    from vgai_lite.config import FlockConfig
+    from vgai_lite.dagnn_training import DAGNNTrainConfig
+    from vgai_lite.render import RenderConfig
+    from vgai_lite.vgai_config import VGAITrainConfig
+    from vgai_lite.vision import VisionConfig
+
+    out = set()
+
+    def walk(x):
+        if dataclasses.is_dataclass(x):
+            for f in dataclasses.fields(x):
+                walk(getattr(x, f.name))
+        elif isinstance(x, (tuple, list)):
+            for y in x:
+                walk(y)
+        elif isinstance(x, (int, float)) and not isinstance(x, bool):
+            out.add(float(x))
+
+    for c in (FlockConfig(), DAGNNTrainConfig(), VGAITrainConfig(), VisionConfig(), RenderConfig()):
+        walk(c)
+    return out
+
+
+def _numbers_in(x) -> set:
+    """Every number in a nested structure of dicts and lists (keys included): the paper's tables."""
+    if isinstance(x, dict):
+        return set().union(*(_numbers_in(k) | _numbers_in(v) for k, v in x.items())) if x else set()
+    if isinstance(x, (list, tuple)):
+        return set().union(*(_numbers_in(y) for y in x)) if x else set()
+    return {float(x)} if isinstance(x, (int, float)) and not isinstance(x, bool) else set()
+
+
+def undefined_numbers(markdown: str, allowed: set) -> list:
+    """The numbers of a markdown text that are neither defined (DEFINED_NUMBERS, small integers,
+    years) nor in ``allowed``: candidates for a measured number typed by hand."""
+    import re
+
+    text = re.sub(r"`[^`]*`", " ", markdown)                 # code: literals of the code it shows
+    text = re.sub(r"\]\([^)]*\)", "]", text)                  # link targets
+    text = re.sub(r"(?i)(?:\beqs?\.|\bequations?|\bsections?|§|\btables?|\bfig(?:ure)?s?\.?|\bexercises?|"
+                  r"\bnotebooks?)\s*[\d.,\-–ab ]+(?:and [\d.]+)?", " ", text)  # references
+    bad = []
+    for m in re.finditer(r"(?<![\w.])(\d[\d,]*(?:\.\d+)?(?:e-?\d+)?)(°|\s?%|×)?", text):  # "2.4×" a ratio, "12 × 128" a shape
+        token = m.group(1).rstrip(",")
+        suffix = (m.group(2) or "").strip()
+        value = float(token.replace(",", ""))
+        if value.is_integer() and (value <= 12 or 1990 <= value <= 2030):
+            continue
+        if token + suffix in DEFINED_NUMBERS or (not suffix and token in DEFINED_NUMBERS):
+            continue
+        if value in allowed and suffix != "×":  # a ratio "2.4×" is a measurement, whatever its value
+            continue
+        bad.append(token + suffix)
+    return bad
+
+
+def test_the_guard_against_hand_typed_numbers_finds_them():
+    allowed = {3.0, 1.5}
+    assert undefined_numbers("Local costs about 4.4× the expert's, trained in 45 s.", allowed) == ["4.4×", "45"]
+    assert undefined_numbers("see eq. 10, section 3.2 and `keep_late = 0.25`; R = 1.5 m, v = 3 m/s, "
+                             "a 360° view, 2020", allowed) == []
+
+
+@pytest.mark.parametrize("source", SOURCES, ids=lambda p: p.stem)
+def test_prose_holds_no_hand_typed_measurement(source):
+    """Numbers in a notebook's prose that come from a measurement are rendered from computed values
+    (``book.prose``), so they cannot go stale; a markdown cell may hold only numbers that define the
+    set-up: the paper's, the config objects', and those of DEFINED_NUMBERS (each with its reason)."""
+    from vgai_lite.paper import PAPER, TABLES
+
+    allowed = _config_values() | _numbers_in(PAPER) | _numbers_in(TABLES)
+    bad = [(i, n) for i, c in enumerate(parse(source.read_text()).cells) if c.cell_type == "markdown"
+           for n in undefined_numbers(c.source, allowed)]
+    assert not bad, (f"{source.name}: numbers typed into markdown cells {bad} (cell index, number): render "
+                     "measured numbers with vgai_lite.book.prose, or add a defining number to DEFINED_NUMBERS "
+                     "with its reason")

@@ -57,15 +57,53 @@ def parse(text: str) -> nbformat.NotebookNode:
     return nb
 
 
+BUSY_CORES = 0.25
+"""Other processes using more than this many cores (averaged over a second) make the machine busy."""
+
+
+def _cpu_jiffies() -> tuple[int, int]:
+    """(busy, total) CPU time of the whole machine since boot, from /proc/stat (Linux)."""
+    fields = [int(x) for x in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle + iowait
+    return sum(fields) - idle, sum(fields)
+
+
+def busy_cores(seconds: float = 1.0) -> float:
+    """How many cores other processes keep busy, measured over ``seconds`` while this one sleeps
+    (on a machine without /proc/stat: the 1-minute load average)."""
+    try:
+        b0, t0 = _cpu_jiffies()
+        time.sleep(seconds)
+        b1, t1 = _cpu_jiffies()
+    except (OSError, ValueError, IndexError):
+        return os.getloadavg()[0]
+    return (b1 - b0) / max(t1 - t0, 1) * (os.cpu_count() or 1)
+
+
+def warn_if_busy(when: str) -> bool:
+    """Print a warning when other processes load the machine: the timings a notebook prints (and the
+    training times it reports) would then not be those of the book's code alone."""
+    load = busy_cores()
+    if load > BUSY_CORES:
+        print(f"WARNING ({when}): other processes keep {load:.2f} cores busy; the timings this notebook "
+              "prints will be too slow. Execute it again on an idle machine before committing it.",
+              file=sys.stderr, flush=True)
+        return True
+    return False
+
+
 def build(source: Path, execute: bool) -> Path:
     nb = parse(source.read_text())
     target = TARGET / (source.stem + ".ipynb")
     if execute:
         env = {k: v for k, v in os.environ.items() if k != "VGAI_LITE_QUICK"}  # committed notebooks: full mode
+        busy = warn_if_busy(f"before {source.stem}")
         start = time.time()
         NotebookClient(nb, timeout=3600, kernel_name="python3",
                        resources={"metadata": {"path": str(TARGET)}}).execute(env=env)
         print(f"executed {source.stem} in {time.time() - start:.0f} s")
+        if warn_if_busy(f"after {source.stem}") or busy:
+            print(f"  {source.stem} ran on a busy machine", file=sys.stderr)
     nbformat.write(nb, target)
     return target
 

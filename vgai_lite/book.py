@@ -44,3 +44,28 @@ SELECTION_SEED = 3000
 """Seed of the validation episodes on which the book picks one of several trainings of a
 configuration (``runs.choose_seed``): neither the evaluation seed nor any training or per-round
 validation seed (seed + 1000)."""
+
+
+def prose(template: str, **values):
+    """Markdown whose numbers are computed, for a notebook's output: every measured number in the
+    book's prose is rendered this way, so it cannot go stale (tests/test_notebook_sources.py checks
+    that the markdown cells hold no other measured numbers).
+
+        prose("Local costs {ratio:.1f}× the expert's.", ratio=local_cost / expert_cost)
+
+    ``template`` is a ``str.format`` template; each ``{name}`` must be given, and only finite numbers
+    (or strings) may fill it: a NaN in prose is a bug to see, not to print."""
+    import math
+    import string
+
+    from IPython.display import Markdown
+
+    wanted = {f for _, f, _, _ in string.Formatter().parse(template) if f}
+    names = {f.split(".")[0].split("[")[0] for f in wanted}
+    missing, extra = sorted(names - set(values)), sorted(set(values) - names)
+    if missing or extra:
+        raise ValueError(f"prose: the template needs {sorted(names)}; missing {missing}, unused {extra}")
+    for k, x in values.items():
+        if isinstance(x, float) and not math.isfinite(x):
+            raise ValueError(f"prose: {k} = {x!r} is not a finite number")
+    return Markdown(template.format(**values))

@@ -127,7 +127,7 @@ def load_or_train(path: Union[str, Path], cfg: FlockConfig, tcfg, train: Callabl
                   **train_kwargs):
     """Load the controller at ``path`` if it was trained, to the end, with exactly ``cfg`` and
     ``tcfg``; otherwise ``train(cfg, tcfg, checkpoint=path, **train_kwargs)`` (``train_dagnn``:
-    about half a minute; ``train_vgai``: about 11 minutes on two cores), which saves it there.
+    about half a minute; ``train_vgai``: about 25 minutes on two cores), which saves it there.
 
     Returns (controller, whether it was trained now); the training record is in ``controller.meta``.
     """

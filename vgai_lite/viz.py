@@ -21,6 +21,21 @@ from .flocking import Trajectory
 from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
 
 
+PALETTE = {"expert": "black", "centralized": "black", "DAGNN": "tab:blue", "VGAI": "tab:orange",
+           "Local": "tab:green", "pilot": "tab:purple", "plain CNN": "tab:brown"}
+"""One colour per controller across the whole book (every figure of notebooks 01-07 takes it from
+here): the expert black, DAGNN blue, VGAI orange, the local heuristic green, the modular vision
+pilot purple, last round's plain-CNN VGAI brown. ``controller_color`` finds a name's colour by the first of these words it contains."""
+
+
+def controller_color(name: str, default: Optional[str] = None) -> Optional[str]:
+    """The book's colour for a controller named ``name`` ("VGAI (F = 6)" -> VGAI's orange; the
+    longest matching key wins, case-insensitive), or ``default`` when no key matches."""
+    low = name.lower()
+    hits = [k for k in PALETTE if k.lower() in low]
+    return PALETTE[max(hits, key=len)] if hits else default
+
+
 def _np(x: torch.Tensor) -> np.ndarray:
     return x.detach().cpu().double().numpy()
 
@@ -71,7 +86,7 @@ def plot_velocity_variance(ax, trajectories: Mapping[str, Trajectory], Ts: float
         var = _np(velocity_variance(traj.v))  # (T, B)
         t = np.arange(var.shape[0]) * Ts
         lo, med, hi = np.percentile(var, [10, 50, 90], axis=1)
-        line, = ax.plot(t, med, label=name)
+        line, = ax.plot(t, med, label=name, color=controller_color(name))
         ax.fill_between(t, lo, hi, color=line.get_color(), alpha=0.2, linewidth=0)
     if log:
         ax.set_yscale("log")
@@ -85,7 +100,7 @@ def animate_swarms(trajectories: Mapping[str, Trajectory], cfg: FlockConfig, b: 
                    every: int = 5, tail: int = 20, size: float = 3.6, dpi: int = 72):
     """Side-by-side animation of swarm ``b`` under each controller; returns a FuncAnimation.
 
-    Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``. ``every`` keeps one
+    Show it in a notebook with ``animation_image(anim)`` (a looping GIF). ``every`` keeps one
     frame in ``every`` steps; ``tail`` draws the last ``tail`` steps of each path.
     """
     names = list(trajectories)
@@ -100,10 +115,11 @@ def animate_swarms(trajectories: Mapping[str, Trajectory], cfg: FlockConfig, b: 
         lo, hi = r.reshape(-1, 2).min(0) - 0.5, r.reshape(-1, 2).max(0) + 0.5
         ax.set_xlim(lo[0], hi[0]), ax.set_ylim(lo[1], hi[1]), ax.set_aspect("equal")
         ax.set_xticks([]), ax.set_yticks([])
-        trails = LineCollection([], colors="tab:blue", linewidths=0.6, alpha=0.4)
+        color = controller_color(n, "tab:blue")
+        trails = LineCollection([], colors=color, linewidths=0.6, alpha=0.4)
         links = LineCollection([], colors="0.8", linewidths=0.5)
         ax.add_collection(links), ax.add_collection(trails)
-        dots = ax.scatter(r[0, :, 0], r[0, :, 1], s=10, color="tab:blue", zorder=3)
+        dots = ax.scatter(r[0, :, 0], r[0, :, 1], s=10, color=color, zorder=3)
         title = ax.set_title(n)
         artists.append((n, trails, links, dots, title))
     fig.tight_layout()
@@ -126,16 +142,37 @@ def animate_swarms(trajectories: Mapping[str, Trajectory], cfg: FlockConfig, b: 
 
 
 def animation_html(anim: animation.FuncAnimation, frame_format: str = "jpeg", loop: bool = True) -> str:
-    """An animation as self-contained HTML with play controls (JPEG frames keep notebooks small)."""
+    """An animation as self-contained HTML with play controls (JPEG frames keep notebooks small).
+
+    Its controls need JavaScript (and Font Awesome from a CDN for their icons): JupyterLab shows
+    nothing of it in a notebook that is not trusted. The book's notebooks use ``animation_image``."""
     with matplotlib.rc_context({"animation.frame_format": frame_format}):
         return anim.to_jshtml(default_mode="loop" if loop else "once")
+
+
+def animation_image(anim: animation.FuncAnimation, fps: float = 8.0):
+    """An animation as an animated GIF that loops: an ``IPython.display.Image`` for a notebook's output.
+
+    A plain image plays without JavaScript, so it shows in a notebook that is not trusted (a fresh
+    clone's), on GitHub and in a static site, and offline. Frames are quantised to 256 colours."""
+    import tempfile
+    from pathlib import Path
+
+    from IPython.display import Image
+
+    if fps <= 0:
+        raise ValueError(f"fps must be > 0, got {fps!r}")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "animation.gif"
+        anim.save(path, writer=animation.PillowWriter(fps=fps))
+        return Image(data=path.read_bytes(), format="gif")
 
 
 def animate_views(traj: Trajectory, cfg: FlockConfig, rcfg=None, agent: int = 0, b: int = 0,
                   every: int = 5, dpi: int = 60):
     """The swarm from above beside what one agent sees: its 360° panorama and its top-down crop.
 
-    Returns a FuncAnimation (show it with ``animation_html``). Views are rendered per frame.
+    Returns a FuncAnimation (show it with ``animation_image``). Views are rendered per frame.
     """
     rcfg = rcfg or RenderConfig()
     r = traj.r[:, b : b + 1]  # (T, 1, N, 2)

@@ -20,19 +20,58 @@
 #    its acceleration $\mathbf u_i(t)$.
 #
 # The CNN and the network are trained **together**, end to end, by **imitating the expert**
-# (with DAgger), backpropagating through the $K$ steps of delayed exchanges.
+# (with DAgger), backpropagating through the $K$ steps of delayed exchanges. The same pipeline as a
+# picture (drawn by `vgai_lite/diagrams.py`):
+
+# %%
+import matplotlib.pyplot as plt
+
+from vgai_lite.diagrams import pipeline
+
+pipeline()
+plt.show()
+
+# %% [markdown]
+# ## Notation
 #
+# | symbol | meaning | in the code |
+# |---|---|---|
+# | $N$, $R$ | agents; communication radius: $i$ hears $j$ iff $\|\mathbf r_i - \mathbf r_j\| \le R$ | `FlockConfig.N`, `.R` |
+# | $\mathbf r_i, \mathbf v_i, \mathbf u_i$ | position, velocity, acceleration of agent $i$, each in $\mathbb R^2$ | `r, v, u`, shape `(B, N, 2)` |
+# | $T_s$, $T$ | sampling period; steps per episode | `FlockConfig.Ts`, `.T` |
+# | $\rho$, $U$ | radius and potential of collision avoidance (eq. 3) | `FlockConfig.rho`, `controllers.potential` |
+# | $\mathbf u^*_i$ | the centralized expert's action (eq. 2) | `controllers.expert_control` |
+# | $\mathbf x_i(t) \in \mathbb R^F$, $\mathbf X(t)$ | agent $i$'s features (its *state*, eq. 4); all agents' as rows, $N \times F$ | `X`, shape `(B, N, F)` |
+# | $F$ | features per agent: 6 exact ones for the DAGNN, $F$ learned ones for VGAI (paper default 24) | `VGAITrainConfig.F` |
+# | $\mathbf S(t)$ | graph shift operator, $N \times N$, nonzero only between neighbours (eq. 5) | `graphs.gso` |
+# | $K$ | **taps** of the aggregation sequence: $K-1$ **exchanges** with neighbours (the paper's tables give $K-1$) | `K` (default 4) |
+# | $\mathbf Z(t)$, $\mathbf z_i(t)$ | delayed aggregation sequence, $N \times KF$ (eq. 6); its row $i$ | `aggregation.aggregation_sequence` |
+# | $\mathrm{NN}_\Theta$ | the MLP from $\mathbf z_i(t)$ to $\mathbf u_i(t)$, the same on every agent (eqs. 7-8) | `models.AggregationMLP` |
+# | $\mathbf H_i(t)$, $\mathrm{CNN}_\Psi$ | agent $i$'s images; the CNN from them to $\mathbf x_i(t)$ (section 3.3) | `vision.camera_input`, `models.VisualCNN` |
+# | $g$, $F_m$ | the book's: frames $g$ steps apart give the CNN motion; $F_m$ of its features are odd in it | `VisionConfig.motion_gap`, `VisualCNN.motion_features` |
+#
+# ## The paper and this book
+#
+# Where we follow the paper and where we differ, and why. The book's column is read from the code's
+# configuration objects, so it says what the code does:
+
+# %%
+from vgai_lite import paper_vs_book
+
+paper_vs_book.show()
+
+# %% [markdown]
 # ## The notebooks
 #
 # | notebook | what it builds | paper |
 # |---|---|---|
-# | **01** flocking dynamics and the expert | double integrators, initial conditions, the cost, the centralized expert, the local heuristic, the relative cost | §3.1, Implementation Details |
-# | **02** graph shift operators | the communication graph, GSOs, one-hop exchanges, the delayed aggregation sequence $\mathbf Z(t)$ | §3.2, eqs. 4-6 |
-# | **03** aggregation GNN | a controller trained by imitation (DAgger) on exact local features: the paper's DAGNN baseline | §3.2, eqs. 7-11 |
-# | **04** rendered observations | what a drone sees: top-down and 360° egocentric images from our own renderer, checked against a pymunk ray caster; 3-D views | Fig. 4 |
-# | **05** the visual CNN | residual blocks, vertical-only pooling, $F$ features | §3.3, Fig. 2 |
-# | **06** VGAI | CNN and DAGNN trained jointly, K-step backpropagation through time | §3.4, Fig. 3 |
-# | **07** experiments | the paper's tables regenerated, the paper's numbers beside ours | §4 |
+# | [**01** flocking dynamics and the expert](01_flocking_dynamics_and_expert.ipynb) | double integrators, initial conditions, the cost, the centralized expert, the local heuristic, the relative cost | §3.1, Implementation Details |
+# | [**02** graph shift operators](02_graph_shift_operators.ipynb) | the communication graph, GSOs, one-hop exchanges, the delayed aggregation sequence $\mathbf Z(t)$ | §3.2, eqs. 4-6 |
+# | [**03** aggregation GNN](03_aggregation_gnn.ipynb) | a controller trained by imitation (DAgger) on exact local features: the paper's DAGNN baseline | §3.2, eqs. 7-10 |
+# | [**04** rendered observations](04_rendered_observations.ipynb) | what a drone sees: top-down and 360° egocentric images from our own renderer, checked against a pymunk ray caster; 3-D views | Fig. 4 |
+# | [**05** the visual CNN](05_visual_state_cnn.ipynb) | residual blocks, vertical-only pooling, $F$ features, visual state estimation | §3.3, Fig. 2 |
+# | [**06** VGAI](06_vgai_joint_training.ipynb) | CNN and DAGNN trained jointly, K-step backpropagation through time; what made it flock | §3.4, Fig. 3 |
+# | [**07** experiments](07_experiments.ipynb) | the paper's tables regenerated, the paper's numbers beside ours | §4 |
 #
 # Notebook 07's tables come from one command, `python -m vgai_lite reproduce` (its results ship in
 # `data/results/`).
@@ -56,7 +95,7 @@
 import torch
 
 import vgai_lite
-from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
 
 print(f"vgai_lite {vgai_lite.__version__}, torch {torch.__version__}")
 print("quick mode" if QUICK else "full mode", "-> episodes per evaluation:", pick(full=50, quick=8))
@@ -68,8 +107,6 @@ print("quick mode" if QUICK else "full mode", "-> episodes per evaluation:", pic
 # piece of this cell.
 
 # %%
-import matplotlib.pyplot as plt
-
 from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
 from vgai_lite.viz import draw_swarm
 
@@ -86,4 +123,31 @@ plt.tight_layout()
 plt.show()
 
 # %% [markdown]
-# Next: **01 · Flocking: the dynamics, the expert and the local heuristic**.
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized
+#   Controllers for Robot Swarms.* CoRL 2020 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308));
+#   the authors' code: [VITA-Group/VGAI](https://github.com/VITA-Group/VGAI).
+# * Tolstaya, Gama, Paulos, Pappas, Kumar, Ribeiro. *Learning Decentralized Controllers for Robot
+#   Swarms with Graph Neural Networks.* CoRL 2019 ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527)):
+#   the expert, the local features and the DAGNN; its environment:
+#   [katetolstaya/gym-flock](https://github.com/katetolstaya/gym-flock).
+# * Gama, Marques, Leus, Ribeiro. *Convolutional Neural Network Architectures for Signals Supported
+#   on Graphs.* IEEE Transactions on Signal Processing, 2019 ([arXiv:1805.00165](https://arxiv.org/abs/1805.00165)):
+#   aggregation graph neural networks; the authors' library:
+#   [alelab-upenn/graph-neural-networks](https://github.com/alelab-upenn/graph-neural-networks).
+# * Ross, Gordon, Bagnell. *A Reduction of Imitation Learning and Structured Prediction to No-Regret
+#   Online Learning.* AISTATS 2011 ([arXiv:1011.0686](https://arxiv.org/abs/1011.0686)): DAgger.
+# * He, Zhang, Ren, Sun. *Deep Residual Learning for Image Recognition.* CVPR 2016
+#   ([arXiv:1512.03385](https://arxiv.org/abs/1512.03385)): the residual blocks of the CNN.
+#
+# ## Key takeaways
+#
+# * Flocking is velocity consensus without collisions; the expert solves it with everyone's
+#   velocities, a drone has only its images and its neighbours' messages.
+# * VGAI is a pipeline of three learned-or-fixed stages per drone: CNN (images to features),
+#   delayed aggregation (features from up to $K-1$ hops), MLP (features to acceleration), trained
+#   together by imitating the expert.
+# * Where the paper is silent, the book chooses, says why, and keeps the choice in one config object.
+#
+# Next: [**01 · Flocking: the dynamics, the expert and the local heuristic**](01_flocking_dynamics_and_expert.ipynb).

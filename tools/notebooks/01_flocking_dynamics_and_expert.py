@@ -35,9 +35,9 @@ from IPython.display import HTML, Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
-from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
 from vgai_lite.paper import PAPER
-from vgai_lite.viz import (animate_swarms, animation_html, draw_swarm, plot_trajectories,
+from vgai_lite.viz import (animate_swarms, animation_image, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
 
 torch.set_num_threads(2)
@@ -129,11 +129,13 @@ for exponent, label in ((0.5, "paper text, sqrt(N)"), (0.25, "reference code, N*
     print(f"{label:26s} radius {c.init_radius:4.2f} m: >=2 neighbours {two:6.1%}, "
           f"no pair < 0.2 m {apart:6.1%}, both {both:7.3%}  ({draws} draws)")
 
-# %% [markdown]
-# With the $N^{1/4}$ disc the neighbour test almost always passes and the 0.2 m test almost always
-# fails: about one candidate in 1,200 survives. `sample_initial_state` therefore draws candidates in
-# vectorised chunks, screens them cheaply, and raises a clear error (rather than looping forever)
-# if a configuration is essentially unsatisfiable.
+# %%
+survivors = (f"about one candidate in {1 / both:,.0f} survives" if both > 0
+             else f"none of the {draws:,} candidates survived")
+prose("With the $N^{{1/4}}$ disc the neighbour test almost always passes and the 0.2 m test almost always "
+      f"fails: {survivors}. `sample_initial_state` therefore draws candidates in vectorised chunks, "
+      "screens them cheaply, and raises a clear error (rather than looping forever) if a configuration "
+      "is essentially unsatisfiable.")
 
 # %%
 t0 = time.perf_counter()
@@ -276,7 +278,7 @@ plt.show()
 # %% [markdown]
 # Two things to keep in mind for the rest of the book. The expert works **early**: it is saturated
 # for the first few tenths of a second and idle after about one second. And so is the **cost**: most
-# of eq. 1 accrues in the first 10-20 steps.
+# of eq. 1 accrues in the first steps (section 10 of notebook 03 measures how much).
 
 # %%
 var = velocity_variance(trajs["Centralized"].v)  # (T, B)
@@ -289,7 +291,7 @@ for k in (10, 20, 50, 100):
 
 # %%
 anim = animate_swarms(trajs, cfg, b=0, every=pick(8, 50), size=3.2, dpi=60)
-HTML(animation_html(anim))
+animation_image(anim)
 
 # %% [markdown]
 # ## 8. The relative cost of the local heuristic, and close approaches
@@ -398,15 +400,25 @@ def my_flocking_cost(v):
 
 check_flocking_cost(my_flocking_cost);
 
+# %%
+prose("""## What we have, and what comes next
+
+* A batched simulator (`step`, `rollout`), the paper's initial conditions, the expert and the local
+  heuristic, and the relative cost with safety figures.
+* The expert needs the whole swarm's velocities; the local heuristic uses only present one-hop
+  information and pays for it (about {ratio:.1f}× the expert's cost on the held-out episodes above).""",
+      ratio=res_local.mean_ratio)
+
 # %% [markdown]
-# ## What we have, and what comes next
+# ## Key takeaways
 #
-# * A batched simulator (`step`, `rollout`), the paper's initial conditions, the expert and the local
-#   heuristic, and the relative cost with safety figures.
-# * The expert needs the whole swarm's velocities; the local heuristic uses only present one-hop
-#   information and pays for it (about 4.4× the expert's cost).
+# * The swarm is a batch of double integrators; the expert (eq. 2) aligns every velocity with the whole swarm's mean and pushes drones apart within $\rho$ (eq. 3).
+# * The paper's text and its reference code disagree on the initial disc and on the potential's sign: we follow the code for the disc (the text's disc cannot satisfy the paper's own constraints) and the text for the potential.
+# * The relative cost compares a controller with the expert on the same initial conditions. Eq. 1 is blind to collisions and mostly spent in the first steps, so the book reports closest approaches and whether the swarm flocked beside every cost.
 #
-# Notebook 02 introduces the communication graph and the **delayed aggregation sequence** that lets
+# ## Next
+#
+# [Notebook 02](02_graph_shift_operators.ipynb) introduces the communication graph and the **delayed aggregation sequence** that lets
 # an agent hear, with delay, from agents several hops away, the ingredient that lets a learned
 # decentralized controller close most of that gap.
 

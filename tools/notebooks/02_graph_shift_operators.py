@@ -29,7 +29,7 @@ from matplotlib.collections import LineCollection
 
 from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
 from vgai_lite.aggregation import AggregationBuffer, aggregation_sequence
-from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
 from vgai_lite.graphs import GSO_KINDS, adjacency, gso, k_hop_reach
 from vgai_lite.viz import draw_swarm
 
@@ -237,9 +237,15 @@ def my_aggregation_sequence(X, S, K):
 check_aggregation_sequence(my_aggregation_sequence);
 
 # %% [markdown]
+# ## Key takeaways
+#
+# * A graph shift operator $\mathbf S(t)$ respects the communication graph, so $\mathbf S\mathbf X$ costs one exchange with one-hop neighbours (eq. 5).
+# * The delayed aggregation sequence $\mathbf Z(t)$ (eq. 6) gathers information from up to $K-1$ hops, each hop one step older: local by construction.
+# * The GSO's normalisation decides how aggregated features scale when the team gets denser.
+#
 # ## Next
 #
-# Notebook 03 feeds $\mathbf z_i(t)$, built from six exact local features, to a small neural network
+# [Notebook 03](03_aggregation_gnn.ipynb) feeds $\mathbf z_i(t)$, built from six exact local features, to a small neural network
 # shared by all agents, and trains it to imitate the expert: the paper's DAGNN baseline.
 
 # %% [markdown]

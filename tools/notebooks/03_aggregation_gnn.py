@@ -1,7 +1,7 @@
 # %% [markdown]
 # # 03 · The aggregation GNN (DAGNN), trained by imitation with DAgger
 #
-# *Paper: section 3.2 (eqs. 7-11), "Implementation Details"; the baseline of Tolstaya et al. 2019.*
+# *Paper: section 3.2 (eqs. 7-10), "Implementation Details"; the baseline of Tolstaya et al. 2019.*
 #
 # Notebook 02 gave every drone its delayed aggregation sequence $\mathbf z_i(t)$. Now a small neural
 # network, **the same on every drone**, maps $\mathbf z_i(t)$ to an acceleration, and learns to do so
@@ -31,7 +31,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, relative_cost, rollout,
                        sample_initial_state)
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick
+from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.dagnn_training import DAGNNTrainConfig, train_dagnn
 from vgai_lite.imitation import load_or_train
@@ -91,7 +91,7 @@ print(DAGNNController(model, cfg))
 # %% [markdown]
 # ## 3. Imitation data, and where the labels live
 #
-# Imitation learning (eq. 10-11): fly swarms, record every agent's $\mathbf z_i(t)$ with the expert's
+# Imitation learning (eqs. 9-10): fly swarms, record every agent's $\mathbf z_i(t)$ with the expert's
 # action $\mathbf u_i^*(t)$ at that state, and fit $\mathrm{NN}_\Theta$ with an L1 loss. The expert's
 # actions are large only early in an episode: it aligns the swarm within about a second.
 
@@ -106,11 +106,16 @@ ax.set_title("the expert's labels: large early, zero after ~1 s")
 plt.show()
 print(f"mean |u*| over steps 0-19: {u_norm[:20].mean():.1f} m/s²; over steps 100-199: {u_norm[100:].mean():.4f} m/s²")
 
+# %%
+tc = DAGNNTrainConfig()
+kept = tc.early_steps + tc.keep_late * (cfg.T - tc.early_steps)  # agent-steps kept per agent and episode
+prose("A uniform sample of agent-steps would spend most updates on states where the answer is \"do "
+      "nothing\". We keep **every** agent-step of the first {early} steps and a random **quarter** of the "
+      "later ones (`keep_late = {keep}`): early states weigh four times more, and the dataset is "
+      "{ratio:.1f}× smaller ({T} steps per episode).",
+      early=tc.early_steps, keep=tc.keep_late, ratio=cfg.T / kept, T=cfg.T)
+
 # %% [markdown]
-# A uniform sample of agent-steps would spend most updates on states where the answer is "do
-# nothing". We keep **every** agent-step of the first 50 steps and a random **quarter** of the later
-# ones (`keep_late = 0.25`): early states weigh four times more, and the dataset is 2.4× smaller.
-#
 # ## 4. DAgger
 #
 # A network trained only on the expert's trajectories never sees the states its own mistakes lead to.
@@ -135,7 +140,8 @@ print(DAGNNTrainConfig())
 # ## 5. Training
 #
 # The book ships the trained DAGNN (`data/dagnn/dagnn_K4.pt`, 30 kB) and `load_or_train` loads it
-# when its configuration matches, or trains it again (about 45 s on one core) otherwise. Regenerate
+# when its configuration matches, or trains it again otherwise (the cell below prints how long the
+# shipped one took). Regenerate
 # every shipped DAGNN with `python -m vgai_lite train-dagnn --all --retrain`.
 #
 # In quick mode we also run a miniature training from scratch, to show the loop at work:
@@ -174,7 +180,8 @@ plt.show()
 
 # %%
 print("validation relative cost by round:", [round(r["val_relative_cost"], 2) for r in hist["rounds"]])
-#
+
+# %% [markdown]
 # ## 6. Evaluation: Centralized, DAGNN, Local
 #
 # All controllers on the same held-out initial conditions (seed `EVAL_SEED`, never used in training):
@@ -297,7 +304,7 @@ display(Markdown("| GSO (trained at N = 50) | N' = 50 | N' = 75 | N' = 100 |\n|-
 #
 # ## 10. What the cost measures, and what it does not
 #
-# Eq. 1 scores velocity agreement only. Most of it accrues in the first 10-20 steps, while the expert
+# Eq. 1 scores velocity agreement only. Most of it accrues in the first steps (measured below), while the expert
 # is saturated at ±30 m/s², so the expert is not even optimal for eq. 1: a *local* rule that aligns
 # harder can beat it. And a rule that ignores collisions altogether is rewarded for it. The local
 # heuristic with other gains on its two sums (alignment, repulsion):
@@ -351,10 +358,17 @@ def my_local_features(r, v, R):
 check_local_features(my_local_features);
 
 # %% [markdown]
+# ## Key takeaways
+#
+# * The DAGNN: exact local features, the delayed aggregation, one MLP shared by every drone, trained by imitating the expert.
+# * DAgger matters: the learner must be shown the states its own mistakes lead to.
+# * More exchanges help; the GSO decides whether a controller trained with 50 drones works in denser teams.
+# * The cost hides what happens late in a flight: judge every controller by its cost, its safety and whether it flocked.
+#
 # ## Next
 #
 # The DAGNN knows its neighbours' relative positions and velocities exactly. A drone with a camera
-# does not: notebook 04 renders what each drone *sees*, and notebooks 05-06 learn to fly from that.
+# does not: [notebook 04](04_rendered_observations.ipynb) renders what each drone *sees*, and notebooks 05-06 learn to fly from that.
 
 # %% [markdown]
 # ## Your score

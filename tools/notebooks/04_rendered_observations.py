@@ -31,11 +31,11 @@ import torch
 from IPython.display import HTML, Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, rollout, sample_initial_state
-from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
 from vgai_lite.physics import raycast_depth, rollout_pymunk
 from vgai_lite.render import (CAMERAS, RenderConfig, bearing_to_column, column_layers, egocentric_depth,
                               render_egocentric, render_topdown, with_motion)
-from vgai_lite.viz import animate_views, animation_html, draw_swarm
+from vgai_lite.viz import animate_views, animation_image, draw_swarm
 
 torch.set_num_threads(2)
 cfg, rcfg = FlockConfig(), RenderConfig()
@@ -225,7 +225,7 @@ HTML(iframe(scene, height=420))
 
 # %%
 anim = animate_views(flight, cfg, rcfg, agent=agent, every=pick(8, 100))
-HTML(animation_html(anim))
+animation_image(anim)
 
 # %% [markdown]
 # ## 6. Speed
@@ -271,9 +271,14 @@ def my_pinhole(theta, d, rcfg):
 check_pinhole(my_pinhole);
 
 # %% [markdown]
+# ## Key takeaways
+#
+# * A drone sees its neighbours as bodies in a 360° panorama of four pinhole cameras; our renderer is batched in torch and checked against a pymunk ray caster.
+# * An image carries bearings (columns) and distances (the depth channel); velocities show only across frames.
+#
 # ## Next
 #
-# Notebook 05 builds the paper's visual state estimator: a CNN with residual blocks that pools only
+# [Notebook 05](05_visual_state_cnn.ipynb) builds the paper's visual state estimator: a CNN with residual blocks that pools only
 # along the vertical axis, so that the bearing of every drone in these panoramas survives to its
 # last layers.
 

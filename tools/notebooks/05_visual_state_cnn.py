@@ -27,7 +27,7 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
-from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.models import VisualCNN
 from vgai_lite.runs import book_estimator
@@ -46,7 +46,7 @@ print(vision)
 # 12 × 32; the drones sit on the horizon and the depth channel already gives their distance, so half
 # the rows cost half the compute and lose little), with two channels (gray, depth), paired with the
 # frame of $g = 5$ steps earlier as $[\mathbf I(t),\ 5(\mathbf I(t) - \mathbf I(t-g))]$: 4 channels in all.
-# Why two frames is the subject of section 4.
+# Why two frames is the subject of section 3.
 
 # %%
 r0, v0 = sample_initial_state(cfg, pick(8, 2), torch.Generator().manual_seed(EVAL_SEED))
@@ -230,9 +230,14 @@ class MyResidualBlock(nn.Module):
 check_residual_block(MyResidualBlock);
 
 # %% [markdown]
+# ## Key takeaways
+#
+# * The CNN pools rows only, so every column's bearing survives to its last layers.
+# * Regressing the DAGNN's exact features (visual state estimation) shows what the CNN can see: relative positions well, relative velocities only from two frames, and poorly when they are small.
+#
 # ## Next
 #
-# Notebook 06 puts the CNN in front of the DAGNN's aggregation and trains both together, end to end,
+# [Notebook 06](06_vgai_joint_training.ipynb) puts the CNN in front of the DAGNN's aggregation and trains both together, end to end,
 # by imitation of the expert with K-step backpropagation through time.
 
 # %% [markdown]

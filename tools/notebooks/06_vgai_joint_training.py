@@ -32,7 +32,7 @@ import torch
 from IPython.display import HTML, Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick
+from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
 from vgai_lite.dagnn_training import train_dagnn
 from vgai_lite.imitation import load_or_train
 from vgai_lite.paper import PAPER
@@ -206,7 +206,7 @@ else:
 # The same initial condition under the expert, the DAGNN, VGAI and the local heuristic:
 
 # %%
-from vgai_lite.viz import animate_swarms, animation_html, plot_velocity_variance
+from vgai_lite.viz import animate_swarms, animation_image, plot_velocity_variance
 
 from vgai_lite import load_controller
 
@@ -222,7 +222,7 @@ ax.set_ylim(bottom=1e-5), ax.axvline(cfg.T * cfg.Ts, color="0.5", ls=":", lw=1)
 ax.set_title("velocity variance over 5 s (median, 10-90% band); dotted: end of the training episodes")
 plt.show()
 anim = animate_swarms({k: trajs[k] for k in ("Centralized", "VGAI", "Local")}, cfg, every=pick(25, 100), size=3.0, dpi=55)
-HTML(animation_html(anim))
+animation_image(anim)
 
 # %% [markdown]
 # ## 6. What made VGAI flock
@@ -375,9 +375,15 @@ def my_dagger_mix(u_learner, u_expert, p, generator):
 check_dagger_mix(my_dagger_mix);
 
 # %% [markdown]
+# ## Key takeaways
+#
+# * VGAI trains the CNN and the MLP together by K-step backpropagation through time; the book warm-starts both first, to train in minutes.
+# * A low cost is not flocking. A plain CNN estimates velocity disagreements with a bias that depends on where the neighbours stand, a steady push; features odd in the motion channels read exactly zero when nothing moves, and VGAI then aligns several times closer.
+# * Judge a learned controller over a longer horizon than its training episodes.
+#
 # ## Next
 #
-# Notebook 07 regenerates the paper's tables (F, K, v_init, R, larger teams) with one command and sets
+# [Notebook 07](07_experiments.ipynb) regenerates the paper's tables (F, K, v_init, R, larger teams) with one command and sets
 # the paper's numbers beside ours.
 
 # %% [markdown]

@@ -38,7 +38,7 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, EVAL_SEED, ROOT, pick
+from vgai_lite.book import DATA_DIR, EVAL_SEED, ROOT, pick, prose
 from vgai_lite.graphs import adjacency
 from vgai_lite.reproduce import PAPER, TABLES, load_results
 
@@ -397,6 +397,11 @@ for v in TABLES["v_init"]["columns"]:
 #   with a pair closer than 0.05 m grows faster than the expert's). With the symmetric-normalised GSO
 #   what a drone aggregates stays on the same scale as its degree grows (notebook 03 shows the
 #   un-normalised GSO failing at 100).
+#
+# ## Key takeaways
+#
+# * Every table comes from one command; its cells are cached and resumable, and each carries its provenance.
+# * A difference within the confidence intervals, or within the spread over training seeds, is not evidence either way.
 #
 # ## What's next
 #

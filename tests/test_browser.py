@@ -1,0 +1,193 @@
+"""What a student sees: every committed notebook opened in JupyterLab, in a real headless Chromium.
+
+The book is opened as ``python -m vgai_lite lab`` opens it (the book's notebooks trusted first), and
+Chromium is driven through its DevTools protocol (a websocket; no driver). For each notebook: every
+image output of the file (figures and the GIF animations) is drawn in the page and has loaded, no
+error dialog shows, no traceback is shown, and in notebook 04 the meshcat 3-D view is there (its
+iframe with the viewer's canvas). Needs Chromium (Debian's ``chromium``; ``.ci/run`` installs it):
+without it the test is skipped, except under ``.ci/run`` (``VGAI_LITE_REQUIRE_BROWSER=1``), where it fails.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import nbformat
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+IMAGE_MIMES = ("image/png", "image/gif", "image/jpeg", "image/svg+xml")
+CHROMIUM = next((p for p in (shutil.which("chromium"), shutil.which("chromium-browser"),
+                             shutil.which("google-chrome")) if p), None)
+LOAD_SECONDS = 90
+LOADS_FROM_NETWORK = re.compile(r"""(?:src|href)\s*=\s*(?:["']|&quot;|\\")\s*(?:https?:)?//""", re.I)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_http(url: str, seconds: float, proc: subprocess.Popen, what: str) -> bytes:
+    end = time.time() + seconds
+    while time.time() < end:
+        if proc.poll() is not None:
+            raise RuntimeError(f"{what} exited with status {proc.returncode} before it answered at {url}")
+        try:
+            with urllib.request.urlopen(url, timeout=2) as r:
+                return r.read()
+        except OSError:
+            time.sleep(0.3)
+    raise TimeoutError(f"{what} did not answer at {url} within {seconds} s")
+
+
+class DevTools:
+    """The smallest client of Chromium's DevTools protocol: commands on one page, over a websocket."""
+
+    def __init__(self, ws_url: str):
+        import websocket  # websocket-client, a dependency of Jupyter's
+
+        self.ws = websocket.create_connection(ws_url, timeout=30, suppress_origin=True)
+        self.next_id = 0
+
+    def call(self, method: str, **params):
+        self.next_id += 1
+        self.ws.send(json.dumps({"id": self.next_id, "method": method, "params": params}))
+        while True:
+            msg = json.loads(self.ws.recv())
+            if msg.get("id") == self.next_id:
+                if "error" in msg:
+                    raise RuntimeError(f"{method}: {msg['error']}")
+                return msg.get("result", {})
+
+    def js(self, expression: str):
+        res = self.call("Runtime.evaluate", expression=expression, returnByValue=True, awaitPromise=True)
+        if "exceptionDetails" in res:
+            raise RuntimeError(f"page script failed: {res['exceptionDetails']}")
+        return res["result"].get("value")
+
+    def close(self):
+        self.ws.close()
+
+
+@pytest.fixture(scope="module")
+def book_in_a_browser(tmp_path_factory):
+    if CHROMIUM is None:
+        if os.environ.get("VGAI_LITE_REQUIRE_BROWSER") == "1":
+            pytest.fail("the browser test must run here: install Debian's chromium (.ci/run does)")
+        pytest.skip("no Chromium on this machine (apt-get install chromium); CI runs this test")
+    tmp = tmp_path_factory.mktemp("browser")
+    env = {**os.environ, "JUPYTER_DATA_DIR": str(tmp / "data"), "JUPYTER_CONFIG_DIR": str(tmp / "config"),
+           "JUPYTER_RUNTIME_DIR": str(tmp / "runtime"), "JUPYTERLAB_SETTINGS_DIR": str(tmp / "settings"),
+           "JUPYTERLAB_WORKSPACES_DIR": str(tmp / "workspaces"), "VGAI_LITE_QUICK": "1"}
+    # every cell in the page (no virtual scrolling), no news or update prompts
+    tracker = tmp / "settings" / "@jupyterlab" / "notebook-extension" / "tracker.jupyterlab-settings"
+    tracker.parent.mkdir(parents=True)
+    tracker.write_text(json.dumps({"windowingMode": "none"}))
+    news = tmp / "settings" / "@jupyterlab" / "apputils-extension" / "notification.jupyterlab-settings"
+    news.parent.mkdir(parents=True)
+    news.write_text(json.dumps({"fetchNews": "false", "checkForUpdates": False}))
+    # the book's notebooks trusted, as `python -m vgai_lite lab` does before it opens them
+    subprocess.run([sys.executable, "-c", "from pathlib import Path; from vgai_lite.__main__ import trust_book; "
+                    f"trust_book(Path({str(ROOT / 'notebooks')!r}))"], env=env, check=True)
+    lab_port, cdp_port, token = _free_port(), _free_port(), "vgai-lite-browser-test"
+    lab = subprocess.Popen([sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={lab_port}",
+                            "--ip=127.0.0.1", f"--IdentityProvider.token={token}", "--allow-root",
+                            f"--notebook-dir={ROOT / 'notebooks'}", "--ServerApp.open_browser=False"],
+                           env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    chrome = subprocess.Popen([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                               "--no-first-run", "--disable-background-networking", "--disable-component-update",
+                               "--disable-sync", "--enable-unsafe-swiftshader", "--window-size=1400,1000",
+                               f"--remote-debugging-port={cdp_port}", f"--user-data-dir={tmp / 'chromium'}",
+                               "about:blank"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        _wait_http(f"http://127.0.0.1:{lab_port}/api/status?token={token}", 60, lab, "JupyterLab")
+        targets = json.loads(_wait_http(f"http://127.0.0.1:{cdp_port}/json", 30, chrome, "Chromium"))
+        page = next(t for t in targets if t.get("type") == "page")
+        tools = DevTools(page["webSocketDebuggerUrl"])
+        tools.call("Page.enable")
+        tools.call("Runtime.enable")
+        yield tools, f"http://127.0.0.1:{lab_port}", token
+        tools.close()
+    finally:
+        for p in (chrome, lab):
+            p.terminate()
+        for p in (chrome, lab):
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def _expected_images(nb) -> int:
+    return sum(1 for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+               if o.get("output_type") in ("display_data", "execute_result")
+               and any(m in o.get("data", {}) for m in IMAGE_MIMES))
+
+
+PAGE_STATE = """(() => {
+  const nb = document.querySelector('.jp-NotebookPanel:not(.lm-mod-hidden) .jp-Notebook');
+  if (!nb) return {ready: false};
+  const outputs = nb.querySelectorAll('.jp-OutputArea-output');
+  const imgs = [...nb.querySelectorAll('.jp-OutputArea-output img')];
+  const frames = [...nb.querySelectorAll('.jp-OutputArea-output iframe')];
+  const canvas = frames.map(f => { try { return f.contentDocument.querySelectorAll('canvas').length; }
+                                   catch (e) { return -1; } });
+  const text = [...nb.querySelectorAll('.jp-OutputArea-output')].map(o => o.innerText).join('\\n');
+  return {ready: true, cells: nb.querySelectorAll('.jp-Cell').length, outputs: outputs.length,
+          images: imgs.length, loaded: imgs.filter(i => i.complete && i.naturalWidth > 0).length,
+          iframes: frames.length, canvases: canvas,
+          dialogs: document.querySelectorAll('.jp-Dialog').length,
+          tracebacks: (text.match(/Traceback \\(most recent call last\\)/g) || []).length};
+})()"""
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_a_student_sees_every_figure_and_animation(book_in_a_browser, path):
+    tools, base, token = book_in_a_browser
+    nb = nbformat.read(path, as_version=4)
+    expected = _expected_images(nb)
+    tools.call("Page.navigate", url=f"{base}/lab/tree/{path.name}?token={token}&reset")
+    end, state = time.time() + LOAD_SECONDS, {}
+    while time.time() < end:
+        state = tools.js(PAGE_STATE) or {}
+        want_frame = path.stem.startswith("04")
+        if (state.get("ready") and state["cells"] == len(nb.cells) and state["loaded"] >= expected
+                and (not want_frame or any(c > 0 for c in state["canvases"]))):
+            break
+        time.sleep(0.5)
+    assert state.get("ready"), f"{path.name}: JupyterLab showed no notebook within {LOAD_SECONDS} s"
+    assert state["cells"] == len(nb.cells), f"{path.name}: {state['cells']} of {len(nb.cells)} cells drawn"
+    assert state["images"] >= expected and state["loaded"] >= expected, \
+        f"{path.name}: {state['loaded']} of {expected} image outputs drawn and loaded ({state})"
+    assert state["dialogs"] == 0, f"{path.name}: an error dialog is open"
+    assert state["tracebacks"] == 0, f"{path.name}: an output shows a traceback"
+    if path.stem.startswith("04"):
+        assert state["iframes"] >= 1 and any(c > 0 for c in state["canvases"]), \
+            f"{path.name}: the meshcat 3-D view is not drawn (iframes {state['iframes']}, canvases {state['canvases']})"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_outputs_need_no_script_and_no_network(path):
+    """Untrusted (a fresh clone), JupyterLab strips scripts from outputs: every animation is an image,
+    and no output loads anything from the network (the meshcat view of 04 is inlined, offline)."""
+    nb = nbformat.read(path, as_version=4)
+    for i, c in enumerate(nb.cells):
+        for o in c.get("outputs", []) if c.cell_type == "code" else []:
+            html = o.get("data", {}).get("text/html", "")
+            html = "".join(html) if isinstance(html, list) else html
+            assert "new Animation(" not in html, \
+                f"{path.name} cell {i}: an animation that needs JavaScript; use viz.animation_image"
+            assert not LOADS_FROM_NETWORK.search(html), f"{path.name} cell {i}: an output loads from the network"
+            assert o.get("output_type") != "error", f"{path.name} cell {i}: committed with an error output"
