@@ -17,9 +17,9 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 GRADED = [p for p in NOTEBOOKS if exercises_of(p.name[:2])]
 
 
-def test_every_notebook_01_to_06_has_a_graded_exercise():
-    assert sorted({k[:2] for k in EXERCISES}) == ["01", "02", "03", "04", "05", "06"]
-    assert [p.name[:2] for p in GRADED] == ["01", "02", "03", "04", "05", "06"]
+def test_every_notebook_01_to_07_has_a_graded_exercise():
+    assert sorted({k[:2] for k in EXERCISES}) == ["01", "02", "03", "04", "05", "06", "07"]
+    assert [p.name[:2] for p in GRADED] == ["01", "02", "03", "04", "05", "06", "07"]
 
 
 def test_strip_solutions_keeps_indent_and_hints():
@@ -65,8 +65,9 @@ def test_score_counts_this_sessions_checks(capsys):
         return u_e
 
     assert not check_dagger_mix(wrong)
-    assert score("06") == {"score": 0, "max_score": 1, "exercises": {"06.1": False}}
-    assert "0/1" in capsys.readouterr().out
+    result = score("06")
+    assert result["exercises"]["06.1"] is False and result["max_score"] == len(exercises_of("06")) == 2
+    assert f"/{result['max_score']}" in capsys.readouterr().out
     with pytest.raises(ValueError, match="two-digit"):
         score("6")
 

@@ -127,3 +127,50 @@ def test_consensus_figures_tell_a_flock_from_a_swarm_that_falls_apart():
     assert groups(r, 1.5).tolist() == [2]
     chain = torch.tensor([[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]]])
     assert groups(chain, 1.5).tolist() == [1]
+
+
+def test_prose_renders_computed_numbers_and_refuses_what_it_cannot():
+    import pytest
+
+    from vgai_lite.book import prose
+
+    assert prose("Local costs {r:.1f}× the expert's.", r=4.281).data == "Local costs 4.3× the expert's."
+    with pytest.raises(ValueError, match="missing"):
+        prose("{a} and {b}", a=1)
+    with pytest.raises(ValueError, match="finite"):
+        prose("{a:.2f}", a=float("nan"))
+
+
+def test_the_lab_command_trusts_exactly_the_books_notebooks(tmp_path, monkeypatch):
+    import shutil
+
+    import nbformat
+    from nbformat.sign import NotebookNotary
+
+    from vgai_lite.__main__ import trust_book
+    from vgai_lite.book import ROOT
+
+    monkeypatch.setenv("JUPYTER_DATA_DIR", str(tmp_path / "data"))
+    book = tmp_path / "notebooks"
+    book.mkdir()
+    for p in sorted((ROOT / "notebooks").glob("0[0-1]_*.ipynb")):
+        shutil.copy(p, book / p.name)
+    nb = nbformat.read(book / "00_overview.ipynb", as_version=4)
+    assert not NotebookNotary().check_signature(nb)          # a fresh clone: not trusted
+    assert trust_book(book) == ["00_overview.ipynb", "01_flocking_dynamics_and_expert.ipynb"]
+    assert NotebookNotary().check_signature(nbformat.read(book / "00_overview.ipynb", as_version=4))
+    nb.cells[0].source += " (edited)"                         # a changed notebook is not trusted
+    assert not NotebookNotary().check_signature(nb)
+
+
+def test_findings_use_one_criterion():
+    from vgai_lite import findings
+
+    a = {"relative_cost_mean": 2.0, "relative_cost_mean_ci95": [1.9, 2.1]}
+    b = {"relative_cost_mean": 1.5, "relative_cost_mean_ci95": [1.4, 1.6]}
+    c = {"relative_cost_mean": 1.55, "ci95": None, "per_seed": [1.5, 1.6], "seed_std": 0.07}
+    assert findings.compare(b, a) == -1 and findings.compare(a, b) == 1 and findings.compare(b, c) == 0
+    assert findings.trend([a, b], -1) == findings.HOLDS
+    assert findings.trend([b, a], -1) == findings.CONTRADICTED
+    assert findings.trend([a, b, c], -1) == findings.CANNOT_TELL
+    assert "cannot be told" in findings.sentence("x", findings.CANNOT_TELL, [a, b], [6, 24])

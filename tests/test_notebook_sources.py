@@ -60,6 +60,10 @@ DEFINED_NUMBERS = {
     "2.8°": "360° / 128 columns",
     "1e-9": "a test's tolerance",
     "20": "the potential's push at rho = 0.5 m, 2 rho (1/rho^4 + 1/rho^2) m/s^2",
+    "20°": "the bearing of notebook 04's worked example",
+    "180°": "a half turn of the world",
+    "190": "a step late in a 200-step episode",
+    "1.96": "the normal quantile of a two-sided 95 % interval",
 }
 
 
@@ -105,6 +109,7 @@ def undefined_numbers(markdown: str, allowed: set) -> list:
 
     text = re.sub(r"`[^`]*`", " ", markdown)                 # code: literals of the code it shows
     text = re.sub(r"\]\([^)]*\)", "]", text)                  # link targets
+    text = re.sub(r"(?i)arXiv:\S+", " ", text)                  # references
     text = re.sub(r"(?i)(?:\beqs?\.|\bequations?|\bsections?|§|\btables?|\bfig(?:ure)?s?\.?|\bexercises?|"
                   r"\bnotebooks?)\s*[\d.,\-–ab ]+(?:and [\d.]+)?", " ", text)  # references
     bad = []

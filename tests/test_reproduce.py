@@ -47,10 +47,12 @@ def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
     dagnn = models_of(rc, "K", "DAGNN", 2)
     assert [_shipped_path(s) for s in dagnn] == [DATA_DIR / "dagnn" / "dagnn_K3.pt", None, None]
     assert all(_shipped_path(s) is None for s in models_of(rc, "R", "DAGNN (retrained)", 1.0))
-    # F = 6, 12 ship with last round's plain recipe: found for it, while the default recipe trains anew
     for name in ("vgai_F6", "vgai_F12", "vgai_K2", "vgai_K3"):
         assert _shipped_path(ModelSpec("vgai", FlockConfig(), VGAI_RUNS[name])) == DATA_DIR / "vgai" / f"{name}.pt"
-    assert all(_shipped_path(models_of(rc, "F", "VGAI", F)[0]) is None for F in (6, 12))
+    # F = 6 ships with the default recipe, which the table's cell asks for; F = 12 (still last round's
+    # plain recipe) is not reused for it: the default recipe trains anew
+    assert _shipped_path(models_of(rc, "F", "VGAI", 6)[0]) == DATA_DIR / "vgai" / "vgai_F6.pt"
+    assert _shipped_path(models_of(rc, "F", "VGAI", 12)[0]) is None
     quick = ReproduceConfig(quick=True)
     assert _shipped_path(models_of(quick, "F", "VGAI", 24)[0]) is None
 
@@ -118,3 +120,16 @@ def test_extras_add_a_vgai_trained_at_each_radius_only_when_asked():
         assert spec.kind == "vgai" and spec.cfg.R == column
     assert _shipped_path(retrained[1.5]) == _shipped_path(models_of(ReproduceConfig(), "F", "VGAI", 24)[0])  # the default
     assert _shipped_path(retrained[2.0]) is None
+
+
+def test_the_plain_cnn_records_of_retrained_configurations_are_kept():
+    """Every configuration retrained with the default recipe keeps its plain-CNN record (notebooks 06-07)."""
+    import json
+
+    from vgai_lite.runs import PLAIN_RUNS
+    from vgai_lite.vgai_config import VGAITrainConfig
+
+    assert "vgai_F24_plain" in PLAIN_RUNS
+    for name, tcfg in PLAIN_RUNS.items():
+        rec = json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text())
+        assert VGAITrainConfig.from_dict(rec["train_config"]) == tcfg, name

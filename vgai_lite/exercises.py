@@ -58,8 +58,13 @@ EXERCISES: dict[str, str] = {
     "04.1": "pinhole column and apparent height",
     "05.1": "residual block with vertical-only pooling",
     "06.1": "DAgger mixing rule",
+    "05.2": "experiment: a panorama that wraps around",
+    "06.2": "experiment: the odd part of a CNN",
+    "07.1": "experiment: a longer horizon",
 }
-"""Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented."""
+"""Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented.
+The open-ended experiments (05.2, 06.2, 07.1) have their checks in ``experiment_exercises``: the
+check grades the tool the student writes; the experiment done with it is the student's."""
 
 GRADE_FILE_ENV = "VGAI_LITE_GRADE_FILE"
 """When set (by ``python -m vgai_lite grade``), every check appends its result to this file as a JSON line."""

@@ -95,7 +95,7 @@ paper_vs_book.show()
 import torch
 
 import vgai_lite
-from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
+from vgai_lite.book import EVAL_SEED, QUICK, pick
 
 print(f"vgai_lite {vgai_lite.__version__}, torch {torch.__version__}")
 print("quick mode" if QUICK else "full mode", "-> episodes per evaluation:", pick(full=50, quick=8))

@@ -31,13 +31,14 @@ import time
 import matplotlib.pyplot as plt
 import numpy as np
 import torch
-from IPython.display import HTML, Markdown, display
+from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
 from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
 from vgai_lite.paper import PAPER
-from vgai_lite.viz import (animate_swarms, animation_image, draw_swarm, plot_trajectories,
+from vgai_lite.evaluate import CLOSE_CALLS
+from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
 
 torch.set_num_threads(2)
@@ -308,17 +309,20 @@ print(res_local)
 # %%
 ratio = (res_local.cost / res_local.expert_cost).numpy()
 fig, axes = plt.subplots(1, 2, figsize=(12, 3.8))
-axes[0].hist(ratio, bins=20, color="tab:orange")
+axes[0].hist(ratio, bins=20, color=PALETTE["Local"], alpha=0.8)
 axes[0].axvline(res_local.mean_ratio, color="k", label=f"ours, mean ratio {res_local.mean_ratio:.2f}")
 paper_local = PAPER["R"]["Local"][1.5]  # the paper's Local at the defaults (R = 1.5 m, v_init = 3 m/s)
 axes[0].axvline(paper_local, color="tab:red", ls="--", label=f"paper: {paper_local:.2f}")
-axes[0].set_xlabel("per-episode cost ratio Local / Centralized"), axes[0].legend()
+axes[0].set_xlabel("per-episode cost ratio Local / Centralized"), axes[0].set_ylabel("episodes")
+axes[0].legend()
 bins = np.linspace(0, 0.3, 31)
-axes[1].hist(res_local.expert_safety.min_distance.numpy(), bins=bins, alpha=0.6, label="Centralized")
-axes[1].hist(res_local.safety.min_distance.numpy(), bins=bins, alpha=0.6, label="Local")
-for th in (0.05, 0.1):
-    axes[1].axvline(th, color="0.5", ls=":")
-axes[1].set_xlabel("closest approach of any pair in an episode [m]"), axes[1].legend()
+axes[1].hist(res_local.expert_safety.min_distance.numpy(), bins=bins, alpha=0.6, label="Centralized",
+             color=PALETTE["expert"])
+axes[1].hist(res_local.safety.min_distance.numpy(), bins=bins, alpha=0.6, label="Local", color=PALETTE["Local"])
+for th, ls in zip(CLOSE_CALLS, (":", "--")):
+    axes[1].axvline(th, color="0.4", ls=ls, label=f"close call: < {th:g} m")
+axes[1].set_xlabel("closest approach of any pair in an episode [m]"), axes[1].set_ylabel("episodes")
+axes[1].legend()
 plt.tight_layout()
 plt.show()
 

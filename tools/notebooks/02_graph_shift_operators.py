@@ -29,7 +29,7 @@ from matplotlib.collections import LineCollection
 
 from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
 from vgai_lite.aggregation import AggregationBuffer, aggregation_sequence
-from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
+from vgai_lite.book import EVAL_SEED, QUICK, pick
 from vgai_lite.graphs import GSO_KINDS, adjacency, gso, k_hop_reach
 from vgai_lite.viz import draw_swarm
 

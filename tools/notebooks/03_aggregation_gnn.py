@@ -217,16 +217,17 @@ display(Markdown("| controller | relative cost (95% CI) | median ratio | paper |
 # %%
 trajs = {c_name: rollout(c, cfg, r0[:1], v0[:1]) for c_name, c in
          (("Centralized", ExpertController(cfg)), ("DAGNN", dagnn), ("Local", LocalController(cfg)))}
-from vgai_lite.viz import plot_trajectories, plot_velocity_variance
+from vgai_lite.viz import controller_color, plot_trajectories, plot_velocity_variance
 
 fig, axes = plt.subplots(1, 4, figsize=(18, 4.3))
 for ax, (c_name, tr) in zip(axes, trajs.items()):
-    plot_trajectories(ax, tr)
-    ax.set_title(c_name)
+    plot_trajectories(ax, tr, color=controller_color(c_name))
+    ax.set_title(f"{c_name}: paths of one episode (o = start)")
 all_trajs = {c_name: rollout(c, cfg, r0, v0) for c_name, c in
              (("Centralized", ExpertController(cfg)), ("DAGNN", dagnn), ("Local", LocalController(cfg)))}
 plot_velocity_variance(axes[3], all_trajs, cfg.Ts)
 axes[3].set_ylim(bottom=1e-4)
+axes[3].set_title(f"velocity variance, {len(r0)} episodes (median, 10-90%)")
 plt.tight_layout()
 plt.show()
 

@@ -1,0 +1,77 @@
+"""One criterion for every finding the book states about its numbers, and the sentence it gives.
+
+Introduced in notebook 06; notebook 07 checks the paper's findings with it. A relative cost comes
+with an interval: its bootstrap 95 % interval over episodes, or, for a row averaged over several
+training seeds, mean ± 1.96 × (spread over seeds) / √seeds. Then:
+
+  a < b   when a's interval lies entirely below b's (the two do not overlap)
+  a trend ("falls as F grows") holds when every step of the series is such a difference in the
+          trend's direction; it is contradicted when some step is one in the other direction;
+          otherwise our numbers cannot tell (the differences are within the intervals).
+
+The paper reports no intervals: its column compares its numbers as printed.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Optional, Sequence
+
+HOLDS, CONTRADICTED, CANNOT_TELL = "yes", "no", "cannot tell"
+
+
+def interval(cell: dict) -> tuple[float, float]:
+    """(low, high) of a relative cost: a record with ``relative_cost_mean_ci95`` (one evaluation) or
+    ``ci95``, else a table cell over training seeds (``per_seed`` with ``seed_std``)."""
+    ci = cell.get("relative_cost_mean_ci95") or cell.get("ci95")
+    if ci:
+        return float(ci[0]), float(ci[1])
+    seeds, std = cell.get("per_seed") or [], cell.get("seed_std")
+    if len(seeds) > 1 and std is not None:
+        mean, half = float(cell["relative_cost_mean"]), 1.96 * float(std) / math.sqrt(len(seeds))
+        return mean - half, mean + half
+    raise ValueError(f"a relative cost without an interval (no ci95, no spread over seeds): {sorted(cell)}")
+
+
+def compare(a: dict, b: dict) -> int:
+    """-1 if a is lower than b by the criterion (intervals apart), +1 if higher, 0 if they overlap."""
+    (alo, ahi), (blo, bhi) = interval(a), interval(b)
+    return -1 if ahi < blo else (1 if alo > bhi else 0)
+
+
+def trend(cells: Sequence[dict], direction: int) -> str:
+    """Whether a series of relative costs moves in ``direction`` (-1: falls, +1: rises) at every
+    step, by the criterion: HOLDS, CONTRADICTED or CANNOT_TELL."""
+    if direction not in (-1, 1):
+        raise ValueError(f"direction must be -1 (falls) or +1 (rises), got {direction!r}")
+    if len(cells) < 2:
+        raise ValueError(f"a trend needs at least two cells, got {len(cells)}")
+    steps = [compare(b, a) for a, b in zip(cells, cells[1:])]
+    if all(s == direction for s in steps):
+        return HOLDS
+    if any(s == -direction for s in steps):
+        return CONTRADICTED
+    return CANNOT_TELL
+
+
+def paper_trend(values: Sequence[float], direction: int) -> Optional[str]:
+    """The same question of the paper's printed numbers (no intervals): HOLDS or CONTRADICTED."""
+    if len(values) < 2:
+        return None
+    ok = all((b - a) * direction > 0 for a, b in zip(values, values[1:]))
+    return HOLDS if ok else CONTRADICTED
+
+
+def series_text(cells: Sequence[dict], labels: Sequence) -> str:
+    """'6: 2.43 (2.30-2.57) → 12: ...', each cost with its interval."""
+    return " → ".join(f"{lab}: {c['relative_cost_mean']:.2f} ({interval(c)[0]:.2f}-{interval(c)[1]:.2f})"
+                      for lab, c in zip(labels, cells))
+
+
+def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) -> str:
+    """The finding as a sentence generated from the data: the claim, the verdict by the criterion
+    and the numbers behind it."""
+    how = {HOLDS: "holds in ours: every step is larger than its intervals",
+           CONTRADICTED: "does not hold in ours: some step goes the other way by more than its intervals",
+           CANNOT_TELL: "cannot be told from ours: the differences are within the intervals"}[verdict]
+    return f"{claim}: {how} ({series_text(cells, labels)})."
