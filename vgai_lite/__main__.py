@@ -7,7 +7,8 @@
   benchmark  agent-steps per second of the simulator
   train-dagnn  train (or load) the book's DAGNN baselines, evaluate them, write data/dagnn/
   train-vgai   train (or load) the book's VGAI and visual state estimators, write data/vgai/
-  reproduce    the paper's tables (F, K, v_init, R, N'): train what is missing, evaluate, data/results/
+  reproduce    the paper's tables (F, K, v_init, R, N'): train what is missing, evaluate, data/results/;
+               --only robustness: the perturbation sweep of notebook 08, data/robustness/
   student-copies  write the notebooks with every exercise's solution replaced by a stub
   grade        execute a student's notebook in quick mode and score its exercises (JSON)
 """
@@ -227,9 +228,19 @@ def cmd_reproduce(args, extra):
                          episodes=args.episodes, episodes_large=args.episodes_large, retrain=args.retrain,
                          extras=args.extras)
     for t in args.only or []:
-        if t not in TABLES:
-            raise SystemExit(f"--only takes table names {list(TABLES)}, got {t!r}")
-    results = run(args.only, rc, out=args.out)
+        if t not in TABLES and t != "robustness":
+            raise SystemExit(f"--only takes table names {list(TABLES)} or 'robustness', got {t!r}")
+    only = args.only
+    if only and "robustness" in only:
+        from . import robustness
+
+        rb = robustness.RobustnessConfig.quick_sweep() if args.quick else robustness.RobustnessConfig()
+        res = robustness.run(rb, out=args.out if only == ["robustness"] else None)
+        print(robustness.format_results(res))
+        only = [t for t in only if t != "robustness"]
+        if not only:
+            return
+    results = run(only, rc, out=args.out)
     for table in results["tables"]:
         print()
         print(format_table(results, table))
@@ -291,7 +302,7 @@ def main(argv=None):
     p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
     p.add_argument("--threads", type=int, default=2)
     p = sub.add_parser("reproduce", help="the paper's tables: train what is missing, evaluate, write data/results/")
-    p.add_argument("--only", nargs="+", metavar="TABLE", help="tables to run: F K v_init R N (default all)")
+    p.add_argument("--only", nargs="+", metavar="TABLE", help="tables to run: F K v_init R N (default all), or robustness (notebook 08's sweep)")
     p.add_argument("--quick", action="store_true", help="every table in small form (tiny trainings, 2 short episodes)")
     p.add_argument("--seeds", type=int, default=3, help="training seeds of the DAGNN rows (default 3)")
     p.add_argument("--vgai-seeds", dest="vgai_seeds", type=int, default=1,

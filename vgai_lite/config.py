@@ -11,6 +11,17 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 POTENTIALS = ("paper", "reference")
+
+DISTANCE_FLOOR = 1e-3
+"""m: the pair distance below which eq. 3's potential and the DAGNN's 1/||r||^2, 1/||r||^4 features
+are evaluated as if the pair were this far apart (``controllers.potential``, ``features.local_features``).
+The paper is silent; at 0 m they are 1/0 and two coincident agents would make the expert's
+acceleration NaN. At 1 mm the potential's push, about 2/||r||^3 = 2e9 m/s^2, is already 10^8 times
+the actuators' limit u_max, so the floor changes no saturated command of any reachable state;
+it only keeps the arithmetic finite (also in float32). Coincident agents (r_ij = 0 exactly) give each
+other no push, as no direction is defined; their other neighbours and velocities still act.
+It is not a FlockConfig field: it is numerical safety, not part of the problem, and changing it
+would leave every trained controller and cached result unchanged."""
 INIT_METHODS = ("reject", "repair")
 
 

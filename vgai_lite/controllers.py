@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import torch
 
-from .config import FlockConfig
+from .config import DISTANCE_FLOOR, FlockConfig
 from .flocking import check_state, pairwise_offsets, saturate
 
 
@@ -16,7 +16,9 @@ def potential(d2: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
 
     paper:      U = 1/d2 - log d2  if ||r_ij|| <= rho, else 1/rho^2 - log rho^2 (constant)
     reference:  U = 1/d2 + log d2  (the public reference code's sign), same cut-off.
+    d2 is floored at DISTANCE_FLOOR^2 (config.DISTANCE_FLOOR: finite at d2 = 0).
     """
+    d2 = d2.clamp(min=DISTANCE_FLOOR ** 2)
     sign = -1.0 if cfg.potential == "paper" else 1.0
     rho2 = torch.as_tensor(cfg.rho ** 2, dtype=d2.dtype, device=d2.device)
     inside = 1.0 / d2 + sign * torch.log(d2)
@@ -30,9 +32,9 @@ def potential_gradient(r_ij: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
     With d2 = ||r_ij||^2:  grad (1/d2) = -2 r_ij / d2^2  and  grad log d2 = 2 r_ij / d2, so
     paper:      grad U = -2 r_ij (1/d2^2 + 1/d2)   (always pushes i away from j)
     reference:  grad U = -2 r_ij (1/d2^2 - 1/d2)
-    and grad U = 0 beyond rho, where U is constant.
+    and grad U = 0 beyond rho, where U is constant. d2 is floored at DISTANCE_FLOOR^2 (zero at r_ij = 0).
     """
-    d2 = r_ij.square().sum(dim=-1, keepdim=True)
+    d2 = r_ij.square().sum(dim=-1, keepdim=True).clamp(min=DISTANCE_FLOOR ** 2)
     sign = -1.0 if cfg.potential == "paper" else 1.0
     inv = 1.0 / d2
     grad = -2.0 * r_ij * (inv * inv - sign * inv)
@@ -42,9 +44,10 @@ def potential_gradient(r_ij: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
 def _repulsion(dx, dy, d2, mask, cfg: FlockConfig) -> torch.Tensor:
     """-sum_j grad_{r_i} U over the pairs in ``mask`` (B, N, N), from pairwise offsets: (B, N, 2).
 
-    -grad_{r_i} U = w_ij r_ij with w_ij = 2 (1/d2^2 -+ 1/d2); w_ij = 0 outside ``mask``.
+    -grad_{r_i} U = w_ij r_ij with w_ij = 2 (1/d2^2 -+ 1/d2); w_ij = 0 outside ``mask``; d2 floored
+    at DISTANCE_FLOOR^2, so that coincident agents (r_ij = 0) push each other with 0, not NaN.
     """
-    inv = torch.where(mask, d2, torch.inf).reciprocal_()  # 1/d2 on the masked pairs, else 0
+    inv = torch.where(mask, d2.clamp(min=DISTANCE_FLOOR ** 2), torch.inf).reciprocal_()  # 1/d2 on the masked pairs, else 0
     sign = -1.0 if cfg.potential == "paper" else 1.0
     w = 2.0 * inv * (inv - sign)
     return torch.stack(((w * dx).sum(dim=-1), (w * dy).sum(dim=-1)), dim=-1)

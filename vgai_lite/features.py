@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import torch
 
+from .config import DISTANCE_FLOOR
 from .flocking import check_state, pairwise_offsets
 
 FEATURE_NAMES = ("sum dv_x", "sum dv_y", "sum r_x/r^4", "sum r_y/r^4", "sum r_x/r^2", "sum r_y/r^2")
@@ -22,11 +23,13 @@ def local_features(r: torch.Tensor, v: torch.Tensor, R: float) -> torch.Tensor:
     """The 6 exact local features of every agent. r, v: (B, N, 2) -> X: (B, N, 6).
 
     Order: [sum (v_i - v_j) (x, y), sum r_ij/||r_ij||^4 (x, y), sum r_ij/||r_ij||^2 (x, y)].
+    ||r_ij|| is floored at config.DISTANCE_FLOOR (1 mm), as in the expert's potential: coincident
+    agents add 0 to the repulsion features instead of NaN.
     """
     check_state(r, v)
     dx, dy, d2 = pairwise_offsets(r)
     A = (d2 <= R * R).to(r.dtype)
-    inv2 = torch.where(d2 <= R * R, d2, torch.inf).reciprocal()  # 1/||r_ij||^2 on edges, else 0
+    inv2 = torch.where(d2 <= R * R, d2.clamp(min=DISTANCE_FLOOR ** 2), torch.inf).reciprocal()  # 1/||r_ij||^2 on edges, else 0
     inv4 = inv2 * inv2
     dv = A.sum(-1, keepdim=True) * v - A @ v
     rep4 = torch.stack(((inv4 * dx).sum(-1), (inv4 * dy).sum(-1)), dim=-1)

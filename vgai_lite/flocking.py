@@ -15,8 +15,39 @@ import torch
 from .config import FlockConfig
 
 
+class NonFiniteStateError(ValueError):
+    """A state or an acceleration holds NaN or inf. ``swarm`` and ``agent`` locate the first bad
+    entry; ``step`` is the rollout step at which it appeared (None outside a rollout)."""
+
+    def __init__(self, message: str, swarm: int, agent: int, step: Optional[int] = None):
+        super().__init__(message)
+        self.swarm, self.agent, self.step = swarm, agent, step
+
+
+def first_nonfinite(x: torch.Tensor) -> Optional[tuple[int, int]]:
+    """(swarm, agent) of the first agent of x (B, N, ...) with a NaN or inf entry, or None."""
+    bad = ~torch.isfinite(x)
+    if not bad.any():
+        return None
+    b, i = torch.nonzero(bad.flatten(2).any(dim=-1))[0].tolist()
+    return b, i
+
+
+def check_finite(x: torch.Tensor, label: str, step: Optional[int] = None) -> None:
+    """Raise a NonFiniteStateError naming the first swarm and agent of x (B, N, ...) that holds
+    NaN or inf (and the rollout ``step``, when given)."""
+    where = first_nonfinite(x)
+    if where is not None:
+        b, i = where
+        at = f" at step {step}" if step is not None else ""
+        raise NonFiniteStateError(
+            f"{label} is not finite{at}: swarm {b}, agent {i} has {x[b, i].flatten().tolist()}. "
+            f"States and accelerations must be finite numbers (no NaN, no inf).", b, i, step)
+
+
 def check_state(r: torch.Tensor, v: Optional[torch.Tensor] = None, name: str = "r") -> None:
-    """Raise a ValueError unless ``r`` (and ``v``) are floating tensors of shape (B, N, 2)."""
+    """Raise a ValueError unless ``r`` (and ``v``) are finite floating tensors of shape (B, N, 2)
+    (a NonFiniteStateError, a ValueError, naming the first bad swarm and agent, for NaN or inf)."""
     for label, x in ((name, r), ("v", v)):
         if x is None:
             continue
@@ -28,6 +59,7 @@ def check_state(r: torch.Tensor, v: Optional[torch.Tensor] = None, name: str = "
                              f"got {tuple(x.shape)}{hint}")
         if not x.is_floating_point():
             raise ValueError(f"{label} must be a floating tensor (float32 or float64), got {x.dtype}")
+        check_finite(x, label)
     if v is not None and v.shape != r.shape:
         raise ValueError(f"{name} and v must have the same shape (B, N, 2), got {tuple(r.shape)} "
                          f"and {tuple(v.shape)}")
@@ -209,6 +241,8 @@ def rollout(controller: Callable, cfg: FlockConfig, r0: torch.Tensor, v0: torch.
 
     At every step: u = saturate(controller(r, v)), then (r, v) = step(r, v, u). Gradients are off.
     Args: r0, v0: (B, N, 2). Returns: a Trajectory with T = steps.
+    Raises: NonFiniteStateError, naming the step, swarm and agent, as soon as the controller returns
+    a NaN or inf acceleration or the state stops being finite (nothing is clipped or carried on).
     """
     check_state(r0, v0, name="r0")
     steps = cfg.T if steps is None else steps
@@ -218,14 +252,16 @@ def rollout(controller: Callable, cfg: FlockConfig, r0: torch.Tensor, v0: torch.
         controller.reset()
     r, v = r0, v0
     rs, vs, us, dmin = [], [], [], []
-    for _ in range(steps):
+    for t in range(steps):
         u = controller(r, v)
         if not isinstance(u, torch.Tensor) or u.shape != r.shape:
             got = tuple(u.shape) if isinstance(u, torch.Tensor) else type(u).__name__
             raise ValueError(f"the controller must return accelerations of shape {tuple(r.shape)}, got {got}")
+        check_finite(u, f"the acceleration {getattr(controller, 'name', type(controller).__name__)} returned", t)
         u = saturate(u, cfg)
         rs.append(r), vs.append(v), us.append(u), dmin.append(min_pair_distance(r))
         r, v = step(r, v, u, cfg)
+        check_finite(torch.cat((r, v), dim=-1), "the state (r, v)", t + 1)
     vt = torch.stack(vs)
     return Trajectory(r=torch.stack(rs), v=vt, u=torch.stack(us), cost=flocking_cost(vt),
                       min_distance=torch.stack(dmin))

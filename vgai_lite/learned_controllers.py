@@ -9,7 +9,12 @@ Both follow the same three stages per step, and differ only in the first:
     u(t)  the action             saturate(NN_Theta(Z(t))), eqs. 7-8
 
 ``observe(r, v)`` runs the first two and returns Z(t); ``act(Z)`` the last. DAgger's data
-collection (``imitation.fly_dagger``) calls them apart to record Z(t).
+collection (``imitation.fly_dagger``) calls them apart to record Z(t). ``observe`` takes an optional
+``world`` (``perturbations.World``): what the world does to the camera frames, the measured
+positions and the exchanges (notebook 08); without one, the world is the training's.
+
+A call ``controller(r, v)`` runs in ``torch.inference_mode`` (its output carries no autograd graph)
+unless ``controller.gradients`` is set True; training builds its graphs from the models directly.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ import torch
 from .aggregation import AggregationBuffer
 from .config import FlockConfig
 from .features import local_features, signed_log
-from .flocking import saturate
+from .flocking import check_state, saturate
 from .graphs import DEFAULT_GSO, GSO_KINDS, adjacency, gso
 from .models import AggregationMLP, VGAIModel
 from .vision import VisionConfig, camera_input, flown_backwards
@@ -32,7 +37,18 @@ def _check_gso(gso_kind: str) -> None:
         raise ValueError(f"unknown GSO kind {gso_kind!r}; expected one of {GSO_KINDS}")
 
 
-class DAGNNController:
+class _Learned:
+    """What both learned controllers share: the protocol's ``__call__`` and ``K``."""
+
+    gradients = False
+    """Set True to differentiate through ``controller(r, v)``; by default calls run in inference mode."""
+
+    def __call__(self, r: torch.Tensor, v: torch.Tensor, world=None) -> torch.Tensor:
+        with torch.inference_mode(not self.gradients):
+            return self.act(self.observe(r, v, world))
+
+
+class DAGNNController(_Learned):
     """The paper's DAGNN baseline as a controller: exact local features -> Z(t) -> MLP -> u.
 
     At each call: X(t) = transform(local_features(r, v)) (B, N, 6); S(t) = GSO of the graph of
@@ -66,17 +82,19 @@ class DAGNNController:
         X = local_features(r, v, self.cfg.R)
         return signed_log(X) if self.feature_transform == "signed_log" else X
 
-    def observe(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        """One exchange: push X(t), S(t) into the buffer and return Z(t), (B, N, K, 6)."""
-        S = gso(adjacency(r, self.cfg.R), self.gso_kind)
-        return self.buffer.push(self.features(r, v), S)
+    def observe(self, r: torch.Tensor, v: torch.Tensor, world=None) -> torch.Tensor:
+        """One exchange: push X(t), S(t) into the buffer and return Z(t), (B, N, K, 6).
+        With a ``world``, X(t) comes from the positions as measured there, and S(t) from the links
+        that carried a message."""
+        if world is None:
+            S = gso(adjacency(r, self.cfg.R), self.gso_kind)
+            return self.buffer.push(self.features(r, v), S)
+        S = gso(world.links(adjacency(r, self.cfg.R)), self.gso_kind)
+        return self.buffer.push(self.features(world.positions(r), v), S, delay=world.delay)
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:
         """u(t) = saturate(NN_Theta(Z(t))), (B, N, 2)."""
         return saturate(self.model(Z), self.cfg)
-
-    def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        return self.act(self.observe(r, v))
 
     def spec(self) -> dict:
         """What ``load_controller`` needs to rebuild this controller (plain values only)."""
@@ -88,7 +106,7 @@ class DAGNNController:
                 f"gso={self.gso_kind!r}, R={self.cfg.R})")
 
 
-class VGAIController:
+class VGAIController(_Learned):
     """VGAI as a controller: images -> CNN -> delayed aggregation -> MLP -> u, for any N.
 
     At each call every agent renders its own view of the positions r (its camera), pairs it with
@@ -133,22 +151,24 @@ class VGAIController:
             self.seen.pop(0)
         return self.seen[0]
 
-    def features(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
-        """X(t) from the agents' images, (B, N, F)."""
-        images = camera_input(self.vision, self.cfg, r, self._remember(r, v))
+    def features(self, r: torch.Tensor, v: torch.Tensor = None, world=None) -> torch.Tensor:
+        """X(t) from the agents' images, (B, N, F); with a ``world``, through its cameras."""
+        check_state(r)
+        camera = None if world is None else world.camera
+        images = camera_input(self.vision, self.cfg, r, self._remember(r, v), camera)
         return self.model.features(images)
 
-    def observe(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
+    def observe(self, r: torch.Tensor, v: torch.Tensor = None, world=None) -> torch.Tensor:
         """One exchange: push X(t), S(t) into the buffer and return Z(t), (B, N, K, F)."""
-        S = gso(adjacency(r, self.cfg.R), self.gso_kind)
-        return self.buffer.push(self.features(r, v), S)
+        if world is None:
+            S = gso(adjacency(r, self.cfg.R), self.gso_kind)
+            return self.buffer.push(self.features(r, v), S)
+        S = gso(world.links(adjacency(r, self.cfg.R)), self.gso_kind)
+        return self.buffer.push(self.features(r, v, world), S, delay=world.delay)
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:
         """u(t) = saturate(NN_Theta(Z(t))), (B, N, 2)."""
         return saturate(self.model.mlp(Z), self.cfg)
-
-    def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        return self.act(self.observe(r, v))
 
     def spec(self) -> dict:
         """What ``load_controller`` needs to rebuild this controller (plain values only)."""

@@ -121,13 +121,21 @@ def positions_before(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v:
 
 
 def camera_input(vision: VisionConfig, cfg: FlockConfig, r_now: torch.Tensor,
-                 r_before: torch.Tensor) -> torch.Tensor:
+                 r_before: torch.Tensor, camera=None) -> torch.Tensor:
     """The CNN's input H(t) of every agent, from the positions now and g steps before:
-    r_now, r_before (M, N, 2) -> (M, N, C, H, W). With motion_gap 0, ``r_before`` is ignored."""
+    r_now, r_before (M, N, 2) -> (M, N, C, H, W). With motion_gap 0, ``r_before`` is ignored.
+    ``camera(frame, lag)``, if given, is what the camera does to each raw frame (M, N, C0, H, W)
+    taken ``lag`` steps ago (0 or g) before the CNN sees it: noise, blur, a dead camera
+    (``perturbations``)."""
     now = vision.frame(r_now, cfg)
+    if camera is not None:
+        now = camera(now, 0)
     if vision.motion_gap == 0:
         return now
-    return with_motion(now, vision.frame(r_before, cfg), vision.motion_mode, MOTION_SCALE)
+    before = vision.frame(r_before, cfg)
+    if camera is not None:
+        before = camera(before, vision.motion_gap)
+    return with_motion(now, before, vision.motion_mode, MOTION_SCALE)
 
 
 def stored_images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor,
