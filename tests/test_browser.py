@@ -13,72 +13,21 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
-import socket
 import subprocess
 import sys
 import time
-import urllib.request
 from pathlib import Path
 
 import nbformat
 import pytest
+from devtools import CHROMIUM, DevTools, start_chromium
+from devtools import free_port as _free_port, wait_http as _wait_http
 
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 IMAGE_MIMES = ("image/png", "image/gif", "image/jpeg", "image/svg+xml")
-CHROMIUM = next((p for p in (shutil.which("chromium"), shutil.which("chromium-browser"),
-                             shutil.which("google-chrome")) if p), None)
 LOAD_SECONDS = 90
 LOADS_FROM_NETWORK = re.compile(r"""(?:src|href)\s*=\s*(?:["']|&quot;|\\")\s*(?:https?:)?//""", re.I)
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _wait_http(url: str, seconds: float, proc: subprocess.Popen, what: str) -> bytes:
-    end = time.time() + seconds
-    while time.time() < end:
-        if proc.poll() is not None:
-            raise RuntimeError(f"{what} exited with status {proc.returncode} before it answered at {url}")
-        try:
-            with urllib.request.urlopen(url, timeout=2) as r:
-                return r.read()
-        except OSError:
-            time.sleep(0.3)
-    raise TimeoutError(f"{what} did not answer at {url} within {seconds} s")
-
-
-class DevTools:
-    """The smallest client of Chromium's DevTools protocol: commands on one page, over a websocket."""
-
-    def __init__(self, ws_url: str):
-        import websocket  # websocket-client, a dependency of Jupyter's
-
-        self.ws = websocket.create_connection(ws_url, timeout=30, suppress_origin=True)
-        self.next_id = 0
-
-    def call(self, method: str, **params):
-        self.next_id += 1
-        self.ws.send(json.dumps({"id": self.next_id, "method": method, "params": params}))
-        while True:
-            msg = json.loads(self.ws.recv())
-            if msg.get("id") == self.next_id:
-                if "error" in msg:
-                    raise RuntimeError(f"{method}: {msg['error']}")
-                return msg.get("result", {})
-
-    def js(self, expression: str):
-        res = self.call("Runtime.evaluate", expression=expression, returnByValue=True, awaitPromise=True)
-        if "exceptionDetails" in res:
-            raise RuntimeError(f"page script failed: {res['exceptionDetails']}")
-        return res["result"].get("value")
-
-    def close(self):
-        self.ws.close()
 
 
 @pytest.fixture(scope="module")
@@ -106,11 +55,7 @@ def book_in_a_browser(tmp_path_factory):
                             "--ip=127.0.0.1", f"--IdentityProvider.token={token}", "--allow-root",
                             f"--notebook-dir={ROOT / 'notebooks'}", "--ServerApp.open_browser=False"],
                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    chrome = subprocess.Popen([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                               "--no-first-run", "--disable-background-networking", "--disable-component-update",
-                               "--disable-sync", "--enable-unsafe-swiftshader", "--window-size=1400,1000",
-                               f"--remote-debugging-port={cdp_port}", f"--user-data-dir={tmp / 'chromium'}",
-                               "about:blank"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    chrome = start_chromium(cdp_port, tmp / 'chromium')
     try:
         _wait_http(f"http://127.0.0.1:{lab_port}/api/status?token={token}", 60, lab, "JupyterLab")
         targets = json.loads(_wait_http(f"http://127.0.0.1:{cdp_port}/json", 30, chrome, "Chromium"))

@@ -9,6 +9,7 @@
   train-vgai   train (or load) the book's VGAI and visual state estimators, write data/vgai/
   reproduce    the paper's tables (F, K, v_init, R, N'): train what is missing, evaluate, data/results/;
                --only robustness: the perturbation sweep of notebook 08, data/robustness/
+  site       the book as a static website (Sphinx + MyST-NB, from the executed notebooks), site/
   student-copies  write the notebooks with every exercise's solution replaced by a stub
   grade        execute a student's notebook in quick mode and score its exercises (JSON)
 """
@@ -249,6 +250,16 @@ def cmd_reproduce(args, extra):
           f"{args.out or ('data/results_quick' if args.quick else 'data/results')}/results.json and .csv")
 
 
+def cmd_site(args, extra):
+    from . import website
+
+    info = website.build(args.out, quiet=not args.verbose)
+    for w in info["warnings"]:
+        print(w)
+    print(f"built {len(info['pages'])} pages in {info['seconds']:.0f} s, {info['megabytes']:.1f} MB: "
+          f"open {info['out']}/index.html (or serve it: python -m http.server -d {args.out})")
+
+
 def cmd_benchmark(args, extra):
     import torch
 
@@ -316,6 +327,9 @@ def main(argv=None):
                    help="from scratch: train every model anew (shipped checkpoints included) and recompute every cell")
     p.add_argument("--extras", action="store_true",
                    help="also our rows beyond the paper's that need VGAI trainings (VGAI retrained at R = 1.0, 2.0)")
+    p = sub.add_parser("site", help="the book as a static website from the executed notebooks (needs requirements-site.txt)")
+    p.add_argument("--out", default="site", help="folder for the site (default ./site)")
+    p.add_argument("--verbose", action="store_true", help="show Sphinx's output")
     p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
     p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
     p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")
@@ -332,7 +346,7 @@ def main(argv=None):
     return {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
      "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn,
      "train-vgai": cmd_train_vgai, "student-copies": cmd_student_copies,
-     "reproduce": cmd_reproduce,
+     "reproduce": cmd_reproduce, "site": cmd_site,
      "grade": cmd_grade}[args.command](args, extra)
 
 
