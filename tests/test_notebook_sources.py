@@ -64,6 +64,7 @@ DEFINED_NUMBERS = {
     "180°": "a half turn of the world",
     "190": "a step late in a 200-step episode",
     "1.96": "the normal quantile of a two-sided 95 % interval",
+    "10,000": "the random starts of the NaN property test (tests/test_numerical_safety.py)",
 }
 
 
@@ -88,8 +89,11 @@ def _config_values() -> set:
         elif isinstance(x, (int, float)) and not isinstance(x, bool):
             out.add(float(x))
 
-    for c in (FlockConfig(), DAGNNTrainConfig(), VGAITrainConfig(), VisionConfig(), RenderConfig()):
+    from vgai_lite.robustness import TARGETS, RobustnessConfig
+
+    for c in (FlockConfig(), DAGNNTrainConfig(), VGAITrainConfig(), VisionConfig(), RenderConfig(), RobustnessConfig()):
         walk(c)
+    walk(list(TARGETS.values()))
     return out
 
 

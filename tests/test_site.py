@@ -141,3 +141,13 @@ def test_search_finds_the_chapters(site):
         hits = tools.js("[...document.querySelectorAll('#search-results li a')].map(a => a.getAttribute('href'))") or []
     assert len(hits) >= 3, f"search for 'flocking' found {hits}"
     assert not tools.errors()
+
+
+def test_without_the_site_packages_the_command_says_how_to_install_them(monkeypatch):
+    import importlib.util as iu
+
+    from vgai_lite import website
+
+    monkeypatch.setattr(iu, "find_spec", lambda name, *a: None)
+    with pytest.raises(SystemExit, match="requirements-site.txt"):
+        website.check_installed()

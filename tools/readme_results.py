@@ -41,6 +41,10 @@ def _flock(rec: dict) -> str:
     return f"{var['2s']:.1e} / {var['5s']:.1e} | {rec['share_connected_at_end']:.0%}"
 
 
+TRAINED_BESIDE = {"K2", "K3"}
+"""The book's other VGAIs that trained beside another job (one thread each, on the 2 cores): their
+recorded time is not the recipe's time alone."""
+
 TRAINED_ALONE = {"vgai_F24_seed2"}
 """The shipped training seeds that trained alone on the 2 cores (seeds 0 and 1 trained two at a time,
 one thread each, in the session that added them): their recorded time is the recipe's time alone."""
@@ -99,9 +103,10 @@ def section() -> str:
         "",
         "Did it flock: the velocity variance (1/N) Σ‖v_i − v̄‖² (eq. 1's summand) at 2 s, the end of the paper's "
         "episode, and at 5 s of the same flights flown on (median over the episodes), and the share of episodes whose "
-        "communication graph is still connected at 5 s. The rows marked "
-        "\"last round's plain CNN\" were trained before the recipe of notebook 06, section 6 (their retraining "
-        "with it is next).",
+        "communication graph is still connected at 5 s."
+        + (" The rows marked \"last round's plain CNN\" were trained before the recipe of notebook 06, section 6."
+           if any(_recipe(r) for r in vgai.values()) else
+           " Every VGAI here is trained with the recipe of notebook 06, section 6."),
         "",
         f"Safety on the same episodes: episodes with a pair closer than 0.05 m: DAGNN {d4['share_below_0.05m']:.0%}, "
         f"VGAI {v24['share_below_0.05m']:.0%}, expert {d4['expert_share_below_0.05m']:.0%}; median closest approach "
@@ -112,13 +117,40 @@ def section() -> str:
         "VGAI's training seeds: " + ", ".join(
             f"seed {choice['candidates'][n]['training_seed']} {r['train_seconds'] / 60:.0f} min "
             + ("alone" if n in TRAINED_ALONE else "beside another training (one thread each)")
-            for n, r in seed_recs.items()) + ". The other VGAIs, each alone: "
-        + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.1f} min" for n, r in vgai.items() if n != "F24")
+            for n, r in seed_recs.items()) + ". The other VGAIs: "
+        + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.1f} min"
+                    + (" (beside another job, one thread each)" if n in TRAINED_BESIDE else " alone")
+                    for n, r in vgai.items() if n != "F24")
         + " (a run that reuses a cached first stage counts that stage's recorded time in its own)."
         + (f" The from-scratch reproduction of every table (`python -m vgai_lite reproduce --retrain --seeds 1`), "
            f"which trained last round's VGAIs, took {scratch[-1]['wall_seconds'] / 60:.0f} min." if scratch else ""),
+        "",
+        _robustness(),
     ]
     return "\n".join([BEGIN, *text, END])
+
+
+def _robustness() -> str:
+    """One paragraph: the targets of notebook 08's sweep, with the noise-trained VGAI beside."""
+    import sys
+
+    sys.path.insert(0, str(ROOT))
+    from vgai_lite import robustness
+
+    res = robustness.load(ROOT / "data" / "robustness")
+    T = robustness.TARGETS
+    local, clean = robustness.find(res, "Local"), robustness.find(res, "VGAI")
+    links = robustness.find(res, "VGAI", (("links", T["links_p"]),))
+    noisy = robustness.find(res, "VGAI", (("image_noise", T["image_noise_sigma"]),))
+    dl = robustness.find(res, "DAGNN", (("links", T["links_p"]),))
+    aug = _load("data/experiments/vgai_F24_noise_augmented.json")["image_noise"][f"{T['image_noise_sigma']:g}"]
+    eps = res["config"]["episodes"]
+    return (f"Robustness (notebook 08, `python -m vgai_lite reproduce --only robustness`; {eps} held-out episodes per "
+            f"cell): with {T['links_p']:.0%} of messages lost VGAI costs {_ci(links)} (clean {_ci(clean)}; Local "
+            f"unperturbed {local['relative_cost_mean']:.2f}), connected at 5 s in {links['share_connected_at_end']:.0%} "
+            f"of episodes; the DAGNN {_ci(dl)}. With pixel noise sigma = {T['image_noise_sigma']:g} VGAI costs "
+            f"{_ci(noisy)}, {noisy['relative_cost_mean'] / clean['relative_cost_mean']:.2f}x its clean cost; trained two "
+            f"more rounds on noisy frames (`python tools/experiments/noise_augmentation.py`) {_ci(aug)}.")
 
 
 def main() -> None:

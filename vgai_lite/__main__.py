@@ -241,7 +241,10 @@ def cmd_reproduce(args, extra):
         only = [t for t in only if t != "robustness"]
         if not only:
             return
-    results = run(only, rc, out=args.out)
+    ray = None
+    if args.ray is not None:
+        ray = {"address": None if args.ray == "local" else args.ray, "cpus": args.ray_cpus, "threads": args.threads}
+    results = run(only, rc, out=args.out, ray=ray)
     for table in results["tables"]:
         print()
         print(format_table(results, table))
@@ -327,6 +330,12 @@ def main(argv=None):
                    help="from scratch: train every model anew (shipped checkpoints included) and recompute every cell")
     p.add_argument("--extras", action="store_true",
                    help="also our rows beyond the paper's that need VGAI trainings (VGAI retrained at R = 1.0, 2.0)")
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
+                   help="run the trainings and cells as Ray tasks (each with --threads CPUs): on a new local Ray "
+                        "instance, or on the cluster at ADDRESS (e.g. auto, or HEAD:6379 of `ray start --head`); "
+                        "needs requirements-cluster.txt")
+    p.add_argument("--ray-cpus", dest="ray_cpus", type=int, default=None,
+                   help="CPUs of the local Ray instance (default: all of this machine's)")
     p = sub.add_parser("site", help="the book as a static website from the executed notebooks (needs requirements-site.txt)")
     p.add_argument("--out", default="site", help="folder for the site (default ./site)")
     p.add_argument("--verbose", action="store_true", help="show Sphinx's output")

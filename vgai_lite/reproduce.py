@@ -52,7 +52,8 @@ from .vgai_config import VGAITrainConfig
 @dataclass(frozen=True)
 class ReproduceConfig:
     """What a reproduction run does. The committed data/results/ are the defaults with ``extras``
-    (``python -m vgai_lite reproduce --extras``), after a from-scratch run (``--retrain --seeds 1``).
+    (``python -m vgai_lite reproduce --extras``), after a from-scratch run (``--retrain --seeds 1``),
+    both with last round's VGAI recipe (their rerun with the book's retrained VGAIs is pending).
 
     Attributes:
         episodes: held-out episodes per cell (N' <= 75); ``episodes_large`` for N' >= 100, where a
@@ -282,8 +283,12 @@ def _tables(rc: ReproduceConfig, tables: list[str], records: dict) -> tuple[dict
 
 
 def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfig(),
-        out: Optional[Union[str, Path]] = None, progress: bool = True) -> dict:
-    """Compute (or read back) every cell of ``tables`` and write OUT/results.json and .csv."""
+        out: Optional[Union[str, Path]] = None, progress: bool = True, ray: Optional[dict] = None) -> dict:
+    """Compute (or read back) every cell of ``tables`` and write OUT/results.json and .csv.
+
+    ``ray``: compute the trainings and cells as Ray tasks (``ray_runner``) instead of one after the
+    other: a dict of ``ray_runner.run_jobs``'s options (``address``, ``cpus``, ``threads``); the
+    files and numbers are those of a serial run with as many torch threads as ``threads``."""
     tables = list(tables or TABLES)
     unknown = [t for t in tables if t not in TABLES]
     if unknown:
@@ -303,7 +308,14 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
     records: dict[tuple, list] = {}
     bar = tqdm(total=total, desc="reproduce", unit="est-s", disable=not progress,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}] {postfix}")
-    for i, (table, row, column, spec, flight, episodes) in enumerate(jobs):
+    if ray is not None:
+        bar.close()
+        from .ray_runner import run_jobs
+
+        computed, ray_info = run_jobs(jobs, rc, out, progress=progress, **ray)
+        for (table, row, column, *_), rec in zip(jobs, computed):
+            records.setdefault((table, row, column), []).append(rec)
+    for i, (table, row, column, spec, flight, episodes) in enumerate(jobs if ray is None else []):
         bar.set_postfix_str(f"cell {i + 1}/{len(jobs)}: table {table}, {row}, {TABLES[table]['column']} = {column:g}")
         retrain = rc.retrain and spec.kind != "local" and spec.key() not in retrained
         retrained.add(spec.key())
@@ -313,6 +325,8 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
     bar.close()
     seconds = time.perf_counter() - start
     results = {"provenance": provenance(rc, seconds, started), "tables": {}}
+    if ray is not None:
+        results["provenance"]["ray"] = ray_info
     previous = out / "results.json"
     history = []
     if previous.is_file():
@@ -332,6 +346,7 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
                 "training time recorded in each checkpoint used (shipped or trained by this command)"}
     p = results["provenance"]
     p["invocations"] = history + [{"started": started, "command": p["command"], "wall_seconds": p["wall_seconds"],
+                                   **({"ray": ray_info} if ray is not None else {}),
                                    "git_commit": p["git_commit"], "retrain": rc.retrain, "tables": tables,
                                    "cells_computed_now": p["compute_seconds"]["cells_computed_now"],
                                    "models_trained_now": sum(1 for r in every if r["computed_now"]

@@ -44,6 +44,13 @@ APPLIES_TO = {"links": ("DAGNN", "VGAI"), "delay": ("DAGNN", "VGAI"), "image_noi
 """Which controllers each perturbation can reach: the cameras are VGAI's, the exact positions the DAGNN's."""
 
 
+TARGETS = {"links_p": 0.2, "connected": 0.9, "image_noise_sigma": 0.05, "image_noise_ratio": 1.2}
+"""What VGAI was asked to survive (issue 15), set before the sweep: with a share ``links_p`` of its
+messages lost, a cost below the Local heuristic's and the swarm connected at the end in at least
+``connected`` of episodes; with pixel noise ``image_noise_sigma``, a cost at most ``image_noise_ratio``
+times its clean cost."""
+
+
 def make(kind: str, size) -> object:
     """The perturbation ``kind`` of ``size`` (DeadCamera takes none: size 1 means on)."""
     if kind not in KINDS:
@@ -62,11 +69,15 @@ class RobustnessConfig:
     Attributes:
         perturbations: (name, sizes) pairs, each flown alone from the clean controller; sizes are the
             perturbation's parameter (p, sigma in pixel values or pixels or metres, steps of delay).
-            The issue asks for p = 0 to 0.5 and sigma = 0 to 0.2 (size 0 is the clean flight).
+            The issue asks for p = 0 to 0.5 and sigma = 0 to 0.2 (size 0 is the clean flight); VGAI's
+            pixel-noise curve stops at 0.1 and its blur at one pixel to keep the sweep near half an
+            hour (a VGAI cell is minutes of flying on two cores; the DAGNN's position noise costs
+            seconds and goes to 0.2).
         combined: perturbation sets flown together, e.g. the noise with a blur that averages it away.
         large_teams: N' flown with the clean controllers and with ``large_perturbations``.
-        large_perturbations: the perturbations that hurt most at N = 50 (our choice, read off the
-            curves: 20 % of links dropped, the sweep's target, and image noise sigma = 0.05).
+        large_perturbations: the perturbations that hurt most at N = 50, read off its curves: pixel
+            noise for VGAI, position noise for the DAGNN (lost messages barely move either), at the
+            size of the sweep's target (0.05).
         episodes, episodes_large: held-out episodes per cell at N = 50 and at N' >= 100 (where a VGAI
             episode renders N'^2 views per step).
         flock_times: seconds at which "did it flock" is read at N = 50; at N' >= 100 only the paper's
@@ -75,12 +86,12 @@ class RobustnessConfig:
         quick: a tiny sweep of short episodes (the tests).
     """
 
-    perturbations: tuple = (("links", (0.1, 0.2, 0.3, 0.5)), ("image_noise", (0.02, 0.05, 0.1, 0.2)),
-                            ("position_noise", (0.02, 0.05, 0.1, 0.2)), ("blur", (1.0, 2.0)),
+    perturbations: tuple = (("links", (0.1, 0.2, 0.3, 0.5)), ("image_noise", (0.02, 0.05, 0.1)),
+                            ("position_noise", (0.02, 0.05, 0.1, 0.2)), ("blur", (1.0,)),
                             ("dead_camera", (1,)), ("delay", (1,)))
     combined: tuple = ((("image_noise", 0.05), ("blur", 1.0)),)
     large_teams: tuple = (100, 200)
-    large_perturbations: tuple = (("links", 0.2), ("image_noise", 0.05))
+    large_perturbations: tuple = (("image_noise", 0.05), ("position_noise", 0.05))
     episodes: int = 20
     episodes_large: int = 4
     flock_times: tuple = FLOCK_TIMES

@@ -81,17 +81,28 @@ def obtain(spec: ModelSpec, out: Path, progress: bool = False,
     return path, time.perf_counter() - start, trained
 
 
+def cell_identity(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int) -> dict:
+    """Everything that defines a cell; its hash names the cell's file, OUT/cells/KEY.json."""
+    return {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
+
+
+def cell_path(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int, out: Path) -> Path:
+    return Path(out) / "cells" / f"{config_hash(cell_identity(spec, flight, episodes, seed))}.json"
+
+
 def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int, out: Path,
-                  progress: bool = False, retrain: bool = False, fresh: bool = False) -> dict:
+                  progress: bool = False, retrain: bool = False, fresh: bool = False,
+                  obtained: Optional[tuple] = None) -> dict:
     """Fly the controller of ``spec`` in ``flight`` (episodes from ``seed``) and record its figures;
     read from OUT/cells/ if this exact cell was computed before, unless ``fresh``. ``retrain``:
-    train the controller anew first."""
-    ident = {"model": spec.identity(), "flight": flight.to_dict(), "episodes": episodes, "seed": seed}
+    train the controller anew first. ``obtained``: what ``obtain`` returned when it ran elsewhere
+    (a training task of ``ray_runner``), so that the record says the same as a serial run's."""
+    ident = cell_identity(spec, flight, episodes, seed)
     key = config_hash(ident)
     path = out / "cells" / f"{key}.json"
     if path.is_file() and not fresh:
         return {**json.loads(path.read_text()), "computed_now": False}
-    ckpt, train_seconds, trained = obtain(spec, out, progress, retrain=retrain)
+    ckpt, train_seconds, trained = obtained or obtain(spec, out, progress, retrain=retrain)
     # fly it in this column's configuration (trained in spec.cfg)
     controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
     start = time.perf_counter()

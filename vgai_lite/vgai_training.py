@@ -111,13 +111,14 @@ def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.
 
 
 def bptt_loss(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
-              u: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+              u: torch.Tensor, gen: torch.Generator, camera=None) -> torch.Tensor:
     """The L1 loss of one joint step on ``tcfg.windows`` windows of K steps drawn from stored flights
     r, v, u* (T, E, N, 2). Every agent's K images of a window go through the CNN, the features
     through the unrolled aggregation (eq. 6), the MLP acts once at the window's last step; calling
     ``backward`` on the result is K-step BPTT. Steps before t = 0 contribute nothing (X = 0, S = 0).
     With ``tcfg.aux_weight`` > 0 the loss adds that times stage 1's state-estimation loss on the
-    window's images (``VisualCNN.aux_standardized`` against the standardised exact features)."""
+    window's images (``VisualCNN.aux_standardized`` against the standardised exact features).
+    ``camera``: what the cameras do to the raw frames (``vision.camera_input``), e.g. noise augmentation."""
     T, E = r.shape[:2]
     K, M = tcfg.K, tcfg.windows
     e = torch.randint(0, E, (M,), generator=gen)
@@ -125,7 +126,7 @@ def bptt_loss(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torc
     tau = t_end[:, None] - (K - 1) + torch.arange(K)  # (M, K) times of the window
     valid = (tau >= 0).float()[:, :, None, None]
     tau_c, ee = tau.clamp(min=0).flatten(), e[:, None].expand_as(tau).flatten()
-    X = model.features(stored_images(tcfg.vision, cfg, r, v, ee, tau_c)).view(M, K, cfg.N, tcfg.F)
+    X = model.features(stored_images(tcfg.vision, cfg, r, v, ee, tau_c, camera)).view(M, K, cfg.N, tcfg.F)
     S = gso(adjacency(r[tau_c, ee], cfg.R), tcfg.gso).view(M, K, cfg.N, cfg.N) * valid
     Z = aggregation_sequence(X * valid, S, K)[:, -1]  # Z(t) at the window's last step, (M, N, K, F)
     loss = nnf.l1_loss(model.mlp(Z), u[t_end, e])
@@ -137,14 +138,15 @@ def bptt_loss(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torc
 
 
 def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, tcfg: VGAITrainConfig,
-                store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True) -> list:
-    """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights. Returns the losses."""
+                store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True, camera=None) -> list:
+    """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights (images through
+    ``camera`` when given, see ``bptt_loss``). Returns the losses."""
     r, v, u = store.tensors()
     model.train()
     losses = []
     bar = tqdm(range(tcfg.joint_steps), desc=desc, disable=not progress)
     for _ in bar:
-        loss = bptt_loss(model, cfg, tcfg, r, v, u, gen)
+        loss = bptt_loss(model, cfg, tcfg, r, v, u, gen, camera)
         opt.zero_grad(set_to_none=True)
         loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
         opt.step()

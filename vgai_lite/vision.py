@@ -139,7 +139,8 @@ def camera_input(vision: VisionConfig, cfg: FlockConfig, r_now: torch.Tensor,
 
 
 def stored_images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor,
-                  e: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+                  e: torch.Tensor, t: torch.Tensor, camera=None) -> torch.Tensor:
     """CNN inputs of every agent at stored states (episode e, step t), e, t (M,) of flights r, v
-    (T, E, N, 2): (M, N, C, H, W). What the agents saw when they flew those states."""
-    return camera_input(vision, cfg, r[t, e], positions_before(vision, cfg, r, v, e, t))
+    (T, E, N, 2): (M, N, C, H, W). What the agents saw when they flew those states (through
+    ``camera``, as in ``camera_input``, when given: e.g. noise augmentation)."""
+    return camera_input(vision, cfg, r[t, e], positions_before(vision, cfg, r, v, e, t), camera)
