@@ -49,11 +49,11 @@ def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
     assert all(_shipped_path(s) is None for s in models_of(rc, "R", "DAGNN (retrained)", 1.0))
     for name in ("vgai_F6", "vgai_F12", "vgai_K2", "vgai_K3"):
         assert _shipped_path(ModelSpec("vgai", FlockConfig(), VGAI_RUNS[name])) == DATA_DIR / "vgai" / f"{name}.pt"
-    # F = 6, 12 ship with the default recipe, which the table's cells ask for; K - 1 = 1, 2 (still last
-    # round's plain recipe) are not reused for theirs: the default recipe trains anew
+    # F = 6, 12 and K - 1 = 1, 2 ship with the default recipe, which the tables' cells ask for
     assert [_shipped_path(models_of(rc, "F", "VGAI", F)[0]) for F in (6, 12)] == \
         [DATA_DIR / "vgai" / "vgai_F6.pt", DATA_DIR / "vgai" / "vgai_F12.pt"]
-    assert all(_shipped_path(models_of(rc, "K", "VGAI", k)[0]) is None for k in (1, 2))
+    assert [_shipped_path(models_of(rc, "K", "VGAI", k)[0]) for k in (1, 2)] == \
+        [DATA_DIR / "vgai" / "vgai_K2.pt", DATA_DIR / "vgai" / "vgai_K3.pt"]
     quick = ReproduceConfig(quick=True)
     assert _shipped_path(models_of(quick, "F", "VGAI", 24)[0]) is None
 

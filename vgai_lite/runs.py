@@ -54,13 +54,11 @@ in data/vgai/seeds/choice.json by ``python -m vgai_lite train-vgai --choose`` (a
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
     "vgai_F24": VGAITrainConfig(seed=VGAI_F24_SEED),  # the paper's default: F = 24, K - 1 = 3, egocentric
-    # Table 1a, the default recipe (odd motion features, synthetic stage 1, aux loss):
+    # Tables 1a and 1b, the default recipe (odd motion features, synthetic stage 1, aux loss):
     "vgai_F6": VGAITrainConfig(F=6),     # as many features as the DAGNN's (F_m = 2)
     "vgai_F12": VGAITrainConfig(F=12),   # F_m = 4
-    # Table 1b, still last round's plain-CNN recipe (retrained with the default recipe next; `reproduce`
-    # trains the default recipe for its cells):
-    "vgai_K2": VGAITrainConfig(K=2, **PLAIN_RECIPE),     # K - 1 = 1 exchange
-    "vgai_K3": VGAITrainConfig(K=3, **PLAIN_RECIPE),     # K - 1 = 2 exchanges
+    "vgai_K2": VGAITrainConfig(K=2),     # K - 1 = 1 exchange
+    "vgai_K3": VGAITrainConfig(K=3),     # K - 1 = 2 exchanges (shares K2's stage 1 through STAGE1_CACHE)
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
