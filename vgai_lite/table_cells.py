@@ -21,7 +21,7 @@ from .checkpoints import config_hash, is_finished_with, load_controller
 from .config import FlockConfig
 from .controllers import LocalController
 from .dagnn_training import train_dagnn
-from .evaluate import relative_cost
+from .evaluate import FLOCK_TIMES, relative_cost
 from .imitation import load_or_train
 from .runs import DAGNN_RUNS, VGAI_RUNS, VGAI_SEED_RUNS
 from .vgai_training import train_vgai
@@ -106,7 +106,10 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
     # fly it in this column's configuration (trained in spec.cfg)
     controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
     start = time.perf_counter()
-    res = relative_cost(controller, flight, episodes=episodes, seed=seed, name=spec.name)
+    # did it flock: read at 2 s and 5 s (evaluate.FLOCK_TIMES); a quick run's short episodes (reproduce
+    # --quick, T < 200) read it at their own end instead of flying on to 5 s, which would be most of their cost
+    times = FLOCK_TIMES if flight.T >= 200 else (flight.T * flight.Ts,)
+    res = relative_cost(controller, flight, episodes=episodes, seed=seed, name=spec.name, flock_times=times)
     record = {"key": key, **ident, "name": spec.name, **res.summary(),
               "min_distance": round(float(res.safety.min_distance.min()), 4),
               "expert_min_distance": round(float(res.expert_safety.min_distance.min()), 4),

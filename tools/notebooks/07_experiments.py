@@ -79,7 +79,7 @@ for inv in prov.get("invocations", []):
 #   evaluated on 50 episodes in notebook 06).
 # * **Training seeds.** The DAGNN rows are trained with three seeds (a DAGNN trains in under a
 #   minute) and report the mean over seeds with its standard deviation; VGAI rows use one seed (a
-#   VGAI trains in about a quarter of an hour on this machine).
+#   VGAI trains in about twenty minutes alone on this machine; each record in `data/vgai/` says how long).
 # * **Tables 2a and 2b** (initial velocity, radius): the paper does not say whether it retrains. Its
 #   section is about robustness, so the rows DAGNN and VGAI are the controllers trained at the
 #   defaults ($v_{init} = 3$, $R = 1.5$) and flown in each condition; the row *DAGNN (retrained)*
@@ -90,11 +90,12 @@ for inv in prov.get("invocations", []):
 # * **Our simulator is not AirSim**: the paper's drones fly in AirSim with its physics and cameras;
 #   ours are the paper's stated double integrators and our own renderer. Numbers need not match;
 #   the findings should.
-# * **Which VGAI.** The VGAI rows of these tables are last round's VGAIs, trained with the paper's
-#   plain CNN (the invocations listed above). The consensus round retrained the book's default VGAI
-#   with a recipe that makes it flock (notebook 06, section 6: odd motion features, synthetic
-#   velocities, a state-estimation loss kept in joint training); `python -m vgai_lite reproduce`
-#   trains every VGAI of the tables with that recipe and regenerates them.
+# * **Which VGAI.** The VGAI rows of these tables are still last round's VGAIs, trained with the
+#   paper's plain CNN (the invocations listed above). The book has since retrained every VGAI it
+#   ships (F = 6, 12, 24 and K - 1 = 1, 2, 3) with the recipe that makes VGAI flock (notebook 06,
+#   section 6: odd motion features, synthetic velocities, a state-estimation loss kept in joint
+#   training); `python -m vgai_lite reproduce` flies those checkpoints for the tables' cells and
+#   regenerates the tables with them, which is the next run to commit.
 
 # %%
 def cell(table, row, col):
@@ -494,6 +495,31 @@ for v in TABLES["v_init"]["columns"]:
 #   what a drone aggregates stays on the same scale as its degree grows (notebook 03 shows the
 #   un-normalised GSO failing at 100).
 #
+# ## Past one machine: the same run on Ray
+#
+# A full reproduction with three training seeds per VGAI row is many hours on a laptop. The same
+# command runs its trainings and cells as [Ray](https://docs.ray.io) tasks (`vgai_lite/ray_runner.py`):
+#
+# ```bash
+# pip install -r requirements-cluster.txt                  # Ray, an optional group
+# python -m vgai_lite reproduce --ray --threads 1          # a local Ray instance: one task per core
+# ray start --head                                         # on a cluster: the head machine ...
+# ray start --address HEAD:6379                            # ... and each worker (same repository, same environment)
+# python -m vgai_lite reproduce --ray auto --vgai-seeds 3  # then from the head
+# ```
+#
+# Each training and each cell is one task that declares as many CPUs as the torch threads it runs
+# with; a cell waits for its model through the training task's reference, and the three VGAIs of
+# Table 1b that share a first stage train one after another. The tasks call the same functions and
+# write the same files as the serial loop, so with the same threads per task the numbers are the
+# same (a test checks it on the quick run), and an interrupted run resumes from what is on disk. On a
+# cluster the results folder must be one that every machine sees (a shared filesystem).
+#
+# `python tools/experiments/ray_quick.py` times the quick run serially and on a local Ray instance
+# of two CPUs on this machine, and `vgai_lite.ray_runner.projected_hours` projects the full
+# reproduction's time on M machines from the times recorded in its cells; both are for the run that
+# regenerates these tables with the book's retrained VGAIs.
+#
 # ## Key takeaways
 #
 # * Every table comes from one command; its cells are cached and resumable, and each carries its provenance.
@@ -508,6 +534,8 @@ for v in TABLES["v_init"]["columns"]:
 #   training-to-training spread that the two-trainings table shows.
 # * The exercises of notebooks 01-07 can be graded automatically; see the README's section for
 #   instructors.
+# * [Notebook 08](08_robustness.ipynb) flies the same controllers in harsher worlds than the
+#   paper's: noisy and dead cameras, lost and late messages.
 
 # %% [markdown]
 # ## Your score
