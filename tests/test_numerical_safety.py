@@ -125,17 +125,18 @@ def _random_swarms(N: int, B: int, g: torch.Generator) -> tuple[torch.Tensor, to
 
 
 def test_property_ten_thousand_random_starts_never_make_a_nan(learned):
-    """10,000 initial conditions (N = 2, 3, 5, 8; 2,500 each) flown by the expert, Local, DAGNN and
-    VGAI (20 steps; VGAI 4, enough to fill its K = 4 taps, as it renders every view): every state, action and cost is finite (rollout would raise at the first that is not)."""
+    """10,000 initial conditions (N = 2, 3, 4, 6; 2,500 each) flown by the expert, Local, DAGNN and
+    VGAI (20 steps; VGAI 3, as it renders every view: its frames before t = 0, its motion input and two
+    exchanges): every state, action and cost is finite (rollout would raise at the first that is not)."""
     g = torch.Generator().manual_seed(15)
     total = 0
-    for N in (2, 3, 5, 8):
+    for N in (2, 3, 4, 6):
         cfg = CFG.replace(N=N, min_neighbours=0)
         r, v = _random_swarms(N, 2500, g)
         total += len(r)
         flights = {"expert": (ExpertController(cfg), 20), "Local": (LocalController(cfg), 20),
                    "DAGNN": (load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg=cfg), 20),
-                   "VGAI": (load_controller(DATA_DIR / "vgai" / "vgai_F24.pt", cfg=cfg), 4)}
+                   "VGAI": (load_controller(DATA_DIR / "vgai" / "vgai_F24.pt", cfg=cfg), 3)}
         for name, (controller, steps) in flights.items():
             traj = rollout(controller, cfg, r, v, steps=steps)
             for label, x in (("r", traj.r), ("v", traj.v), ("u", traj.u), ("cost", traj.cost),

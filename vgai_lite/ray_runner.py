@@ -26,6 +26,10 @@ from typing import Optional
 
 from tqdm.auto import tqdm
 
+from .checkpoints import config_hash
+from .table_cells import cell_path, evaluate_cell, obtain
+from .vgai_training import stage1_identity
+
 INSTALL = "pip install -r requirements-cluster.txt"
 
 
@@ -42,8 +46,6 @@ def _train(spec, out: str, retrain: bool, threads: int, *after):
     """A training task: make sure ``spec`` has a finished checkpoint (``after``: tasks to wait for)."""
     import torch
 
-    from .table_cells import obtain
-
     torch.set_num_threads(threads)
     return obtain(spec, Path(out), retrain=retrain)
 
@@ -54,8 +56,6 @@ def _cell(spec, flight, episodes: int, seed: int, out: str, fresh: bool, threads
     whose record carries that training (as in a serial run, the first cell that needs the model);
     ``wait_for``: the training it waits for, otherwise (Ray resolves it first; its value is unused)."""
     import torch
-
-    from .table_cells import evaluate_cell
 
     torch.set_num_threads(threads)
     return evaluate_cell(spec, flight, episodes, seed, Path(out), fresh=fresh, obtained=obtained)
@@ -69,9 +69,6 @@ def run_jobs(jobs: list, rc, out: Path, address: Optional[str] = None, cpus: Opt
     address: None for a new local Ray instance (``cpus`` CPUs, default all), or a running cluster's
     ("auto", or "HOST:6379" of ``ray start --head``)."""
     ray = import_ray()
-    from .table_cells import cell_path
-    from .vgai_training import stage1_identity
-    from .checkpoints import config_hash
 
     if not isinstance(threads, int) or threads < 1:
         raise ValueError(f"threads (torch threads and CPUs per task) must be a positive integer, got {threads!r}")

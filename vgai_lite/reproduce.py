@@ -46,6 +46,7 @@ from .book import DATA_DIR, EVAL_SEED, ROOT
 from .config import FlockConfig
 from .dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
+from .ray_runner import run_jobs
 from .table_cells import ModelSpec, evaluate_cell, model_path
 from .vgai_config import VGAITrainConfig
 
@@ -310,8 +311,6 @@ def run(tables: Optional[list[str]] = None, rc: ReproduceConfig = ReproduceConfi
                bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}] {postfix}")
     if ray is not None:
         bar.close()
-        from .ray_runner import run_jobs
-
         computed, ray_info = run_jobs(jobs, rc, out, progress=progress, **ray)
         for (table, row, column, *_), rec in zip(jobs, computed):
             records.setdefault((table, row, column), []).append(rec)

@@ -32,6 +32,7 @@ from typing import Optional, Union
 import nbformat
 
 from .book import ROOT
+from .course import make_student_copies
 
 INSTALL = "pip install -r requirements-site.txt"
 SITE_PACKAGES = ("sphinx", "myst_nb", "sphinx_book_theme")
@@ -116,8 +117,6 @@ def _favicon(path: Path) -> None:
 def prepare(src: Path, notebooks: Optional[Path] = None) -> list[str]:
     """Write the Sphinx source folder ``src``: conf.py, index.md (the README), the notebooks with
     their download links, and the downloads. Returns the page names in order."""
-    from .course import make_student_copies
-
     notebooks = Path(notebooks or ROOT / "notebooks")
     paths = sorted(notebooks.glob("[0-9][0-9]_*.ipynb"))
     if not paths:
