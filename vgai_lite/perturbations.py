@@ -63,10 +63,6 @@ class Perturbation:
         """The links (B, N, N) that carried a message this exchange (A_ij: i heard j)."""
         return A
 
-    @property
-    def size(self) -> float:
-        raise NotImplementedError
-
 
 class ImageNoise(Perturbation):
     """Gaussian pixel noise of standard deviation ``sigma`` on values in [0, 1], then clipped to [0, 1]."""
