@@ -1,7 +1,8 @@
 """Course use (issue 7): solution stubs, student copies and the grader.
 
-The grader tests execute notebooks (quick mode): every solution notebook gets full marks, every
-untouched student copy executes to the end and gets zero.
+The grader tests execute notebooks (quick mode): one notebook's solutions get full marks (nbval's
+run of each graded notebook checks its solutions, conftest.py), every untouched student copy
+executes to the end and gets zero.
 """
 
 import json
@@ -10,7 +11,8 @@ import nbformat
 import pytest
 
 from vgai_lite.book import ROOT
-from vgai_lite.course import grade_notebook, make_student_copies, report_name, strip_solutions, student_copy
+from vgai_lite.course import (grade_notebook, is_score_cell, make_student_copies, report_name, strip_solutions,
+                              student_copy)
 from vgai_lite.exercises import EXERCISES, check_dagger_mix, exercises_of, score
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
@@ -85,8 +87,10 @@ def test_student_copies_refuse_to_overwrite_the_book():
         make_student_copies(ROOT / "notebooks")
 
 
-@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
-def test_grader_full_marks_for_solutions_zero_for_student_copies(path, student_dir, tmp_path):
+def test_grader_gives_full_marks_to_a_solution_notebook(tmp_path):
+    """The grader's machinery on one notebook's solutions; nbval's run of every graded notebook
+    compares its score cell with the committed full marks (conftest.py), so each solution is checked there."""
+    path = next(p for p in GRADED if p.name.startswith("02"))
     solution = grade_notebook(path, out=tmp_path)
     assert solution["score"] == solution["max_score"] == len(exercises_of(path.name[:2])), solution
     assert solution["cell_errors"] == []
@@ -94,9 +98,50 @@ def test_grader_full_marks_for_solutions_zero_for_student_copies(path, student_d
     assert report_name(path) == f"notebooks__{path.stem}.json"
     assert written["score"] == solution["score"]
 
+
+@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
+def test_every_committed_notebook_shows_full_marks_in_its_score_cell(path):
+    nb = nbformat.read(path, as_version=4)
+    cells = [c for c in nb.cells if c.cell_type == "code" and is_score_cell(c.source)]
+    assert len(cells) == 1 and cells[0] is [c for c in nb.cells if c.cell_type == "code"][-1]
+    text = "".join(o.get("text", "") for o in cells[0].outputs)
+    n = len(exercises_of(path.name[:2]))
+    assert f"Score for notebook {path.name[:2]}: {n}/{n}" in text and text.count("PASSED") == n
+
+
+def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
+    """Under nbval with the repository's conftest, a score cell whose committed output says 1/1 fails
+    when the check did not pass (here: it never ran), and passes when its output is what it prints."""
+    import os
+    import subprocess
+    import sys
+
+    def probe(state, points):
+        nb = nbformat.v4.new_notebook()
+        cell = nbformat.v4.new_code_cell('from vgai_lite.exercises import score\n\nscore("02");', execution_count=1)
+        cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=(
+            f"  02.1 {EXERCISES['02.1']:45s} {state}\nScore for notebook 02: {points}/1\n"))]
+        nb.cells = [cell]
+        nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+        target = tmp_path / f"02_probe_{points}.ipynb"
+        nbformat.write(nb, target)
+        return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "conftest", "--nbval-lax",
+                               "--nbval-current-env", "-p", "no:cacheprovider", str(target)],
+                              cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                              capture_output=True, text=True, timeout=300)
+
+    full_marks = probe("PASSED", 1)
+    assert full_marks.returncode == 1 and "1 failed" in full_marks.stdout, full_marks.stdout[-2000:]
+    assert "Score for notebook 02: 0/1" in full_marks.stdout  # nbval shows what the cell printed instead
+    as_printed = probe("NOT RUN", 0)
+    assert as_printed.returncode == 0 and "1 passed" in as_printed.stdout, as_printed.stdout[-2000:]
+
+
+@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
+def test_grader_gives_zero_to_untouched_student_copies(path, student_dir):
     student = grade_notebook(student_dir / path.name)
     assert student["cell_errors"] == [], "a student copy must execute to the end"
-    assert student["score"] == 0
+    assert student["score"] == 0 and student["max_score"] == len(exercises_of(path.name[:2]))
     for e in student["exercises"].values():
         assert not e["passed"] and "not implemented" in e["message"]
 

@@ -10,7 +10,6 @@ import sys
 import time
 
 import pytest
-import torch
 
 from vgai_lite.reproduce import ReproduceConfig, run
 
@@ -22,20 +21,14 @@ def _need_ray():
         pytest.skip("Ray is not installed: pip install -r requirements-cluster.txt")
 
 
-def test_a_ray_run_gives_the_serial_run_s_numbers_and_resumes(tmp_path):
+def test_a_ray_run_gives_the_serial_run_s_numbers_and_resumes(quick_table_k, tmp_path):
     """Table 1b in quick form: DAGNN and VGAI trainings at K - 1 = 1, 2, 3 (the three VGAIs share their
-    first stage, so their training tasks form a chain) and their cells. The whole quick reproduction
-    is compared by ``tools/experiments/ray_quick.py`` (notebook 07)."""
+    first stage, so their training tasks form a chain) and their cells, against the serial run of
+    conftest.py (1 torch thread, as each Ray task here). The whole quick reproduction is compared by
+    ``tools/experiments/ray_quick.py`` (notebook 07)."""
     _need_ray()
     rc = ReproduceConfig(quick=True, seeds=1)
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # the serial run with the threads of each Ray task
-    try:
-        start = time.perf_counter()
-        serial = run(["K"], rc, out=tmp_path / "serial", progress=False)
-        serial_s = time.perf_counter() - start
-    finally:
-        torch.set_num_threads(threads)
+    serial, _, serial_s = quick_table_k
     start = time.perf_counter()
     on_ray = run(["K"], rc, out=tmp_path / "ray", progress=False, ray={"address": None, "cpus": 2, "threads": 1})
     ray_s = time.perf_counter() - start

@@ -3,6 +3,7 @@
 import csv
 import dataclasses
 import json
+import shutil
 
 import pytest
 
@@ -96,14 +97,15 @@ def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
     assert again["tables"]["K"] == results["tables"]["K"]
 
 
-def test_retrain_trains_every_model_again_and_recomputes_every_cell(tmp_path):
+def test_retrain_trains_every_model_again_and_recomputes_every_cell(quick_table_k, tmp_path):
+    first, folder, _ = quick_table_k  # reproduce --only K --quick --seeds 1 (conftest.py), copied here
+    shutil.copytree(folder, tmp_path / "K")
     rc = ReproduceConfig(quick=True, seeds=1)
-    first = run(["K"], rc, out=tmp_path, progress=False)
-    models = sorted((tmp_path / "models").glob("*.pt"))
+    models = sorted((tmp_path / "K" / "models").glob("*.pt"))
     assert len(models) == 6  # DAGNN and VGAI at K - 1 = 1, 2, 3; the three VGAIs share one stage 1
-    stamps = {p: p.stat().st_mtime_ns for p in models + sorted((tmp_path / "cells").glob("*.json"))}
-    assert len(list((tmp_path / "stage1").glob("*.pt"))) == 1
-    again = run(["K"], dataclasses.replace(rc, retrain=True), out=tmp_path, progress=False)
+    stamps = {p: p.stat().st_mtime_ns for p in models + sorted((tmp_path / "K" / "cells").glob("*.json"))}
+    assert len(list((tmp_path / "K" / "stage1").glob("*.pt"))) == 1
+    again = run(["K"], dataclasses.replace(rc, retrain=True), out=tmp_path / "K", progress=False)
     assert all(p.stat().st_mtime_ns != t for p, t in stamps.items())
     runs = again["provenance"]["invocations"]
     assert [r["retrain"] for r in runs] == [False, True]

@@ -125,9 +125,39 @@ def section() -> str:
         + (f" The from-scratch reproduction of every table (`python -m vgai_lite reproduce --retrain --seeds 1`), "
            f"which trained last round's VGAIs, took {scratch[-1]['wall_seconds'] / 60:.0f} min." if scratch else ""),
         "",
+        _tables(results),
+        "",
         _robustness(),
     ]
     return "\n".join([BEGIN, *text, END])
+
+
+def _tables(results: dict) -> str:
+    """One paragraph: how the tables of notebook 07 were computed, and the quick run on Ray."""
+    prov = results["provenance"]
+    rc = prov["reproduce_config"]
+    last = prov["invocations"][-1]
+    text = (f"The paper's tables (notebook 07, `{last['command']}`; {rc['episodes']} held-out episodes per cell, "
+            f"{rc['episodes_large']} at N' >= 100; DAGNN rows over {rc['seeds']} training seeds, VGAI rows "
+            f"{rc['vgai_seeds']} training each): its last invocation computed {last['cells_computed_now']} cells and "
+            f"trained {last['models_trained_now']} models in {last['wall_seconds'] / 60:.0f} min; "
+            f"{prov['compute_seconds']['cells']} cells in all.")
+    ray_file = ROOT / "data" / "experiments" / "ray_quick.json"
+    if ray_file.is_file():
+        rq = json.loads(ray_file.read_text())
+        text += (f" On Ray (`{rq['command']}`, the quick run of every table on this {rq['cpus']}-core machine): "
+                 f"serial {rq['serial_2_threads_seconds']:.0f} s (2 threads), {rq['serial_1_thread_seconds']:.0f} s "
+                 f"(1 thread), Ray {rq['ray_seconds']:.0f} s (2 CPUs, 1 thread per task), {rq['ray_over_serial']:.2f}x "
+                 f"the serial run; tables {'identical' if rq['ray_equals_serial_1_thread'] else 'NOT identical'} "
+                 "to the 1-thread serial run's.")
+    from vgai_lite.ray_runner import projected_hours
+
+    proj = {m: projected_hours(results, ROOT / "data" / "results", m) for m in (1, 4, 16)}
+    text += (" The full reproduction with 3 training seeds per VGAI row, projected from these cells' recorded times "
+             "(`vgai_lite.ray_runner.projected_hours`, notebook 07): "
+             + ", ".join(f"{p['projected_hours']:.1f} h on {m} machine{'s' if m > 1 else ''}" for m, p in proj.items())
+             + " of 2 cores.")
+    return text
 
 
 def _robustness() -> str:

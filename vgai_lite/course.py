@@ -129,6 +129,15 @@ def make_student_copies(out: Union[str, Path], source: Optional[Union[str, Path]
     return written
 
 
+def is_score_cell(source: str) -> bool:
+    """Whether a code cell is a graded notebook's closing cell, which imports ``score`` and prints the
+    notebook's score (``from vgai_lite.exercises import score`` then ``score("NN");``). The test suite
+    compares its output with the committed full marks (conftest.py)."""
+    lines = [l.strip() for l in source.strip().splitlines() if l.strip()]
+    return (len(lines) == 2 and lines[0] == "from vgai_lite.exercises import score"
+            and re.fullmatch(r'score\("\d\d"\);', lines[1]) is not None)
+
+
 def report_name(path: Union[str, Path]) -> str:
     """File name of a notebook's grade report in a folder: FOLDER__NAME.json, so that the same
     notebook handed in by several students (one folder each) gets one report each."""

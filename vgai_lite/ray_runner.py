@@ -20,6 +20,7 @@ Ray is optional (``pip install -r requirements-cluster.txt``); without it ``--ra
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import Optional
@@ -142,8 +143,6 @@ def projected_hours(results: dict, out: Path, machines: int, vgai_seeds: int = 3
     of the work spread evenly over the machines and the longest chain of tasks that must run one
     after the other (the VGAIs of Table 1b sharing a first stage, then their slowest cell).
     Returns hours for the serial run on one machine and the projection, with the pieces."""
-    import json
-
     if not isinstance(machines, int) or machines < 1:
         raise ValueError(f"machines must be a positive integer, got {machines!r}")
     scale = vgai_seeds / results["provenance"]["reproduce_config"]["vgai_seeds"]

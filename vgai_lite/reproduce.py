@@ -52,9 +52,10 @@ from .vgai_config import VGAITrainConfig
 
 @dataclass(frozen=True)
 class ReproduceConfig:
-    """What a reproduction run does. The committed data/results/ are the defaults with ``extras``
-    (``python -m vgai_lite reproduce --extras``), after a from-scratch run (``--retrain --seeds 1``),
-    both with last round's VGAI recipe (their rerun with the book's retrained VGAIs is pending).
+    """What a reproduction run does. The committed data/results/results.json is the defaults'
+    (``python -m vgai_lite reproduce``), flying the book's shipped VGAIs (notebook 06's recipe); its
+    provenance lists the earlier invocations (a from-scratch run, ``--retrain --seeds 1``, and an
+    ``--extras`` run, both with last round's VGAI recipe, whose cells stay in data/results/cells/).
 
     Attributes:
         episodes: held-out episodes per cell (N' <= 75); ``episodes_large`` for N' >= 100, where a

@@ -44,9 +44,9 @@ from vgai_lite import findings
 from vgai_lite.reproduce import PAPER, TABLES, load_results
 from vgai_lite.viz import PALETTE, controller_color
 
-RERUN = False  # True: run `python -m vgai_lite reproduce --extras` first (reuses what is computed; see above)
+RERUN = False  # True: run `python -m vgai_lite reproduce` first (reuses what is computed; see above)
 if RERUN:
-    done = subprocess.run([sys.executable, "-m", "vgai_lite", "reproduce", "--extras"], capture_output=True,
+    done = subprocess.run([sys.executable, "-m", "vgai_lite", "reproduce"], capture_output=True,
                           text=True, cwd=ROOT)
     print(done.stdout[-3000:] if done.returncode == 0 else done.stderr[-3000:])
 
@@ -70,7 +70,8 @@ for inv in prov.get("invocations", []):
 #   need, one training seed each (the shipped checkpoints included, overwritten), and evaluated
 #   every cell, alone on the machine. The three VGAIs with F = 24 (K - 1 = 1, 2, 3) share their
 #   first training stage, which does not depend on K. Later invocations added the DAGNN's other
-#   training seeds and our extra rows, reading every cell already computed.
+#   training seeds and our extra rows, reading every cell already computed; the last one flew the
+#   book's retrained VGAIs (see *Which VGAI* below), computing their cells anew.
 # * **Same episodes for everyone.** Every cell of a column is flown from the same held-out initial
 #   conditions (seed 2020, never used in training); the relative cost of a cell is the mean of its
 #   costs over the mean of the expert's on those episodes, with a 95% bootstrap interval.
@@ -90,12 +91,13 @@ for inv in prov.get("invocations", []):
 # * **Our simulator is not AirSim**: the paper's drones fly in AirSim with its physics and cameras;
 #   ours are the paper's stated double integrators and our own renderer. Numbers need not match;
 #   the findings should.
-# * **Which VGAI.** The VGAI rows of these tables are still last round's VGAIs, trained with the
-#   paper's plain CNN (the invocations listed above). The book has since retrained every VGAI it
-#   ships (F = 6, 12, 24 and K - 1 = 1, 2, 3) with the recipe that makes VGAI flock (notebook 06,
-#   section 6: odd motion features, synthetic velocities, a state-estimation loss kept in joint
-#   training); `python -m vgai_lite reproduce` flies those checkpoints for the tables' cells and
-#   regenerates the tables with them, which is the next run to commit.
+# * **Which VGAI.** Every VGAI row flies one of the VGAIs the book ships (F = 6, 12, 24 and
+#   K - 1 = 1, 2, 3), each trained with the recipe that makes VGAI flock (notebook 06, section 6: odd
+#   motion features, synthetic velocities, a state-estimation loss kept in joint training); the last
+#   invocation listed above flew them for every VGAI cell. Last round's plain-CNN VGAIs are kept in
+#   `data/experiments/` (the two-trainings table below compares two of their trainings). The row
+#   *VGAI (retrained)* of Table 2b, a VGAI trained at each radius (`reproduce --extras`), is not in
+#   this run: with the new recipe it needs two more VGAI trainings, each with its own first stage.
 
 # %%
 def cell(table, row, col):
@@ -447,53 +449,103 @@ for v in TABLES["v_init"]["columns"]:
           f"ratio {res.mean_ratio:.2f}")
 
 # %% [markdown]
+# What we read in these numbers, cell by cell (each sentence below that states a number or a
+# direction is computed from the tables):
+
+# %%
+def costs(cs, fmt, key="relative_cost_mean"):
+    return ", ".join(format(c[key], fmt) for c in cs)
+
+
+def series(table, row):
+    return costs(cells_of(table, row)[1], ".2f")
+
+
+def falls(trend):
+    return {findings.HOLDS: "every step a fall beyond the intervals",
+            findings.CANNOT_TELL: "not every step beyond the intervals",
+            findings.CONTRADICTED: "a rise beyond the intervals"}[trend]
+
+
+vgai_cells = [(t, c, cell(t, "VGAI", c)) for t in ("F", "K", "v_init", "R", "N") for c in TABLES[t]["columns"]
+              if cell(t, "VGAI", c) and PAPER[t].get("VGAI", {}).get(c) is not None]
+below_paper = [x for t, c, x in vgai_cells if x["relative_cost_mean"] < PAPER[t]["VGAI"][c]]
+F_trend = findings.trend(cells_of("F", "VGAI")[1], -1)
+K_trend = findings.trend(cells_of("K", "VGAI")[1], -1)
+d1, dr1, v1, l1 = (cell("R", r, 1.0) for r in ("DAGNN", "DAGNN (retrained)", "VGAI", "Local"))
+v15, v2 = cell("R", "VGAI", 1.5), cell("R", "VGAI", 2.0)
+vv = [cell("v_init", "VGAI", c) for c in TABLES["v_init"]["columns"]]
+n_cols = TABLES["N"]["columns"]
+n_v = [cell("N", "VGAI", c) for c in n_cols]
+n_l = [cell("N", "Local", c) for c in n_cols]
+bullets = [
+    f"* **Our VGAI is below the paper's** in {len(below_paper)} of the {len(vgai_cells)} cells where the paper "
+    "prints a VGAI number. Its trends in F and K are "
+    + ("resolved" if findings.HOLDS in (F_trend, K_trend) else "not resolved")
+    + f" by one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({falls(F_trend)}), K - 1 = 1, 2, 3 give "
+    f"{series('K', 'VGAI')} ({falls(K_trend)}); the two-trainings table above shows one configuration landing a few "
+    "tenths apart from one training to the next, as much as these differences.",
+    f"* **At R = 1 m, VGAI (trained at 1.5 m) costs {v1['relative_cost_mean']:.2f}**, against the DAGNN's "
+    f"{d1['relative_cost_mean']:.2f} flown there and {dr1['relative_cost_mean']:.2f} retrained there, and Local's "
+    f"{l1['relative_cost_mean']:.2f}. "
+    + {-1: "VGAI is below the DAGNN flown there", 0: "VGAI is level with the DAGNN flown there (intervals overlap)",
+       1: "VGAI is above the DAGNN flown there"}[findings.compare(v1, d1)]
+    + {-1: " and below the one retrained there: ", 0: " and level with the one retrained there: ",
+       1: " but above the one retrained there: "}[findings.compare(v1, dr1)]
+    + "a drone's camera sees every drone in view, not only those within the communication radius, so its own "
+    "images carry what the DAGNN can only learn from a sparser graph. From 1.5 to 2 m VGAI's cost moves from "
+    f"{v15['relative_cost_mean']:.2f} to {v2['relative_cost_mean']:.2f} ({falls(findings.trend([v15, v2], -1))}).",
+    "* **Initial velocity**: the paper's VGAI finds slow starts easier; ours costs "
+    + ", ".join(f"{x['relative_cost_mean']:.2f}" for x in vv) + " at v_init = "
+    + ", ".join(f"{c:g}" for c in TABLES["v_init"]["columns"]) + " m/s ("
+    + ("rising with v_init, as in the paper" if findings.trend(vv, 1) == findings.HOLDS else
+       "not rising with v_init; its training starts are all at 3 m/s") + ").",
+    f"* **Scaling**: trained on 50 agents, VGAI costs {costs(n_v, '.2f')} at N' = {', '.join(f'{c:g}' for c in n_cols)}, "
+    + ("below Local in every column" if all(findings.compare(v, l) == -1 for v, l in zip(n_v, n_l)) else
+       "not below Local in every column")
+    + f"; its velocity variance at 5 s grows from {n_v[0]['velocity_variance_median']['5s']:.0e} to "
+    f"{n_v[-1]['velocity_variance_median']['5s']:.0e} m²/s², and its share of episodes with a pair closer than "
+    f"0.05 m is {costs(n_v, '.0%', 'share_below_0.05m')} (the expert's on the same episodes: "
+    f"{costs(n_v, '.0%', 'expert_share_below_0.05m')}).",
+]
+display(Markdown("\n".join(bullets)))
+
+# %% [markdown]
 # * **Our DAGNN is better than the paper's.** Our simulator is exactly the model the expert and the
 #   DAGNN assume (a noiseless double integrator, exact relative positions and velocities, no
 #   latency), while the paper's AirSim drones have their own flight dynamics between command and
 #   motion. Imitation is easier when the expert's model is the world. At $R = 2$ m our DAGNN even
-#   scores below 1: the expert is a hand-designed potential-field controller, not the minimiser of
-#   eq. 1, so a learned controller can beat its cost.
-# * **VGAI lands near the paper's numbers, but one training per cell cannot resolve its trends in
-#   F and K.** Every VGAI flocks far better than the local heuristic, F = 6 included. But the table
-#   of two trainings above shows one configuration landing a few tenths apart from one training to
-#   the next, as much as the differences between the columns of Tables 1a and 1b; our VGAI rows
-#   (one training each, like the paper's as far as it says) therefore do not show the paper's
-#   "more features, more exchanges help" cleanly, and neither result is evidence against it. The
-#   DAGNN, whose spread over three training seeds is small, does show it for exchanges. The gap
-#   between VGAI and the DAGNN is larger in ours because our DAGNN is better: our VGAI must infer
-#   velocities from two rendered frames of 12 × 128 pixels, with a CNN sized to train in about
-#   11 minutes on two CPU cores, and the alignment term that dominates the expert's action needs
-#   velocities (notebook 05).
-# * **The radius table is where we differ most.** Our rows DAGNN and VGAI are trained at $R = 1.5$
-#   and flown at 1.0 and 2.0; the paper does not say whether it retrained, so the rows *DAGNN
-#   (retrained)* and *VGAI (retrained)* train one at each radius (the lines above). The DAGNN
-#   follows the paper: a larger radius helps, flown or retrained, and retraining matters most at
-#   $R = 1$ m, where fewer neighbours carry less information. VGAI does not: flown or retrained,
-#   its cost does not fall from 1.5 to 2 m, and the retrained row even rises with $R$. Part of
-#   that may be training spread (a few tenths, the two-trainings table). A likely reason, which we
-#   have not isolated, is in what the drones see: in our 12 × 128 panorama (2.8° per column) a
-#   5 cm drone 2 m away spans about one column, one 0.5 m away about four, and our rendered fog
-#   fades distant drones (contrast $e^{-d/4}$), so the extra, distant neighbours a 2 m radius adds
-#   are the ones the CNN sees worst, and the aggregation sums their messages in. The paper's AirSim
-#   cameras give each drone far more pixels. Our local heuristic collapses at $R = 1$ m much more than the
-#   paper's: with one-hop information only and few neighbours, our swarms break apart (notebook 01
-#   shows how sensitive it is to the potential's radius $\rho$).
-# * **Initial velocity**: VGAI finds slow starts easier, as in the paper. Our DAGNN's row does not
-#   rise steadily with $v_{init}$ (the findings table): it is lowest at 1 m/s but not highest at
-#   3 m/s. Retraining the DAGNN on slow starts ($v_{init} = 1$)
-#   does *worse* than flying the default one there (the line above); we have not investigated why.
-#   Our local heuristic's *relative* cost falls as $v_{init}$ grows: relative cost divides by the
+#   scores below 1 (the findings table): the expert is a hand-designed potential-field controller,
+#   not the minimiser of eq. 1, so a learned controller can beat its cost.
+# * **Our VGAI is cheaper than the paper's too** (the cell before; the ratio VGAI / DAGNN is in the
+#   first line of the discussion above). It must infer velocities from two rendered frames of
+#   12 × 128 pixels, with a CNN sized to train on two CPU cores; what made it flock (notebook 06,
+#   section 6) is also what made it cheaper (the two-trainings table: last round's plain CNN).
+# * **The radius table.** Our rows DAGNN and VGAI are trained at $R = 1.5$ and flown at 1.0 and 2.0;
+#   the paper does not say whether it retrained, so the row *DAGNN (retrained)* trains one at each
+#   radius. The DAGNN follows the paper: a larger radius helps, flown or retrained, and retraining
+#   matters most at $R = 1$ m, where fewer neighbours carry less information. Why VGAI gains little
+#   from a larger radius is, we believe, in what the drones see: in our 12 × 128 panorama (2.8° per
+#   column) a 5 cm drone 2 m away spans about one column, one 0.5 m away about four, and our rendered
+#   fog fades distant drones (contrast $e^{-d/4}$), so the extra, distant neighbours a 2 m radius
+#   adds are the ones the CNN sees worst. The paper's AirSim cameras give each drone far more
+#   pixels. Our local heuristic collapses at $R = 1$ m much more than the paper's: with one-hop
+#   information only and few neighbours, our swarms break apart (notebook 01 shows how sensitive it
+#   is to the potential's radius $\rho$).
+# * **Initial velocity, the DAGNN and Local.** Our DAGNN's row does not rise steadily with
+#   $v_{init}$ (the findings table). Retraining the DAGNN on slow starts ($v_{init} = 1$) does
+#   *worse* than flying the default one there (the line above); we have not investigated why. Our
+#   local heuristic's *relative* cost falls as $v_{init}$ grows: relative cost divides by the
 #   expert's cost, which grows faster with $v_{init}$ than the local heuristic's (the cell above).
 # * **Spread.** Differences smaller than the intervals are not evidence either way, in ours or (no
 #   spread reported) in the paper's. The DAGNN's spread over three training seeds is often larger
 #   than its interval over episodes (compare the ± with the intervals of notebook 03), and VGAI's
-#   training-to-training spread (the two-trainings table) is larger still, so one training per
-#   cell, as for our VGAI rows and, as far as it says, the paper's, understates the uncertainty.
-# * **Scaling**: trained on 50 agents, VGAI keeps flocking at 60, 75, 100 and 200, well below the
-#   local heuristic; its cost creeps up with $N'$, and so do its close calls (the share of episodes
-#   with a pair closer than 0.05 m grows faster than the expert's). With the symmetric-normalised GSO
-#   what a drone aggregates stays on the same scale as its degree grows (notebook 03 shows the
-#   un-normalised GSO failing at 100).
+#   training-to-training spread (the two-trainings table, and notebook 06's three training seeds)
+#   is larger still, so one training per cell, as for our VGAI rows and, as far as it says, the
+#   paper's, understates the uncertainty.
+# * **Scaling.** With the symmetric-normalised GSO what a drone aggregates stays on the same scale
+#   as its degree grows (notebook 03 shows the un-normalised GSO failing at 100); VGAI's images do
+#   not: more drones crowd each panorama.
 #
 # ## Past one machine: the same run on Ray
 #
@@ -515,10 +567,44 @@ for v in TABLES["v_init"]["columns"]:
 # same (a test checks it on the quick run), and an interrupted run resumes from what is on disk. On a
 # cluster the results folder must be one that every machine sees (a shared filesystem).
 #
-# `python tools/experiments/ray_quick.py` times the quick run serially and on a local Ray instance
-# of two CPUs on this machine, and `vgai_lite.ray_runner.projected_hours` projects the full
-# reproduction's time on M machines from the times recorded in its cells; both are for the run that
-# regenerates these tables with the book's retrained VGAIs.
+# **Measured on this machine, and projected.** `python tools/experiments/ray_quick.py` times the quick
+# reproduction (every table in miniature, from scratch) serially and on a local Ray instance of two
+# CPUs; `vgai_lite.ray_runner.projected_hours` projects the full reproduction on M machines of two
+# cores from the times recorded in this run's cells (each model's training time from its record,
+# each cell's evaluation time), with three training seeds per VGAI row. The projection is the larger
+# of the work spread evenly over the machines and the longest chain that must run in order (the three
+# VGAIs of Table 1b that share a first stage, then the slowest cell); it ignores Ray's own overhead
+# and assumes every machine is this one.
+
+# %%
+from vgai_lite.ray_runner import projected_hours
+
+rq = json.loads((DATA_DIR / "experiments" / "ray_quick.json").read_text())
+display(prose("The quick run, alone on this {cpus}-core machine (`{cmd}`): **{s2:.0f} s** serially with two torch "
+      "threads (the command's default), {s1:.0f} s serially with one, and **{r:.0f} s** on Ray (two CPUs, one "
+      "thread per task, {tasks} tasks): {ratio:.2f}× the default serial run. The Ray run's tables are "
+      "{eq} the one-thread serial run's. {why}",
+      cpus=rq["cpus"], cmd=rq["command"], s2=rq["serial_2_threads_seconds"], s1=rq["serial_1_thread_seconds"],
+      r=rq["ray_seconds"], ratio=rq["ray_over_serial"], tasks=rq["ray"]["tasks"]["trainings"] + rq["ray"]["tasks"]["cells"],
+      eq="identical to" if rq["ray_equals_serial_1_thread"] else "NOT identical to",
+      why=("On two cores Ray does not win: the serial run already keeps both cores busy with two threads, and Ray "
+           "adds its start-up and its workers' imports; it pays once there are more cores than one task can use."
+           if rq["ray_over_serial"] >= 1 else
+           "Even on two cores Ray wins a little: two one-thread tasks at once use the cores better than one task "
+           "of two threads, whose small tensors leave the second thread idle much of the time.")))
+
+machines = (1, 2, 4, 8, 16)
+proj = [projected_hours(results, DATA_DIR / "results", m) for m in machines]
+display(Markdown("| machines (2 cores each) | projected hours, 3 training seeds per VGAI row | speed-up |\n|---|---|---|\n" +
+                 "\n".join(f"| {p['machines']} | {p['projected_hours']:.1f} | {proj[0]['projected_hours'] / p['projected_hours']:.1f}× |"
+                            for p in proj)))
+prose("Past about {knee} machines the projection stops falling: the longest chain, {chain:.1f} h (the three "
+      "VGAIs of Table 1b, one after the other, then the slowest cell), bounds it. The same run on one machine "
+      "is {one:.1f} h of work.",
+      knee=next((p["machines"] for p in proj if p["projected_hours"] <= p["longest_chain_hours"] + 1e-9), machines[-1]),
+      chain=proj[0]["longest_chain_hours"], one=proj[0]["serial_hours"])
+
+# %% [markdown]
 #
 # ## Key takeaways
 #
@@ -527,8 +613,10 @@ for v in TABLES["v_init"]["columns"]:
 #
 # ## What's next
 #
-# * More training seeds for VGAI (`--vgai-seeds 3`: about 50 minutes per extra seed for the five
-#   VGAI configurations) would give the VGAI rows a spread over training, as the DAGNN rows have.
+# * More training seeds for VGAI (`--vgai-seeds 3`, five more VGAI trainings per extra seed; the
+#   projection above says how long on M machines) would give the VGAI rows a spread over training,
+#   as the DAGNN rows have.
+# * The row *VGAI (retrained)* of Table 2b with the new recipe (`reproduce --extras`).
 # * A steadier VGAI training: its validation cost bounces between DAgger rounds (notebook 06's
 #   curve), so a decaying learning rate or keeping the best validated round should cut the
 #   training-to-training spread that the two-trainings table shows.
