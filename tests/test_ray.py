@@ -50,3 +50,36 @@ def test_without_ray_the_flag_says_how_to_install_it(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails, as where it is not installed
     with pytest.raises(SystemExit, match="requirements-cluster.txt"):
         ray_runner.import_ray()
+
+
+def test_the_projection_spreads_the_work_and_respects_the_chain_of_a_shared_first_stage(tmp_path):
+    """projected_hours on a made-up run: two VGAIs sharing a first stage (K = 2, 3), one with another
+    seed, one DAGNN; each cell's evaluation time and each model's recorded training time in hours."""
+    import json
+
+    from vgai_lite.config import FlockConfig
+    from vgai_lite.ray_runner import projected_hours
+    from vgai_lite.vgai_config import VGAITrainConfig
+
+    cfg = FlockConfig().to_dict()
+    h = 3600.0
+
+    def model(kind, **tc):
+        return {"kind": kind, "config": cfg,
+                "train_config": VGAITrainConfig(**tc).to_dict() if kind == "vgai" else None}
+
+    cells = {"a": (model("vgai", K=2), 1 * h, 0.5 * h), "b": (model("vgai", K=3), 2 * h, 0.5 * h),
+             "c": (model("vgai", K=3, seed=1), 1 * h, 0.5 * h), "d": (model("dagnn"), 0.25 * h, 0.25 * h)}
+    (tmp_path / "cells").mkdir()
+    for key, (m, train, ev) in cells.items():
+        (tmp_path / "cells" / f"{key}.json").write_text(json.dumps(
+            {"model": m, "eval_seconds": ev, "checkpoint": f"models/{key}.pt", "train_seconds_recorded": train}))
+    results = {"provenance": {"reproduce_config": {"vgai_seeds": 1}},
+               "tables": {"K": {"rows": {"VGAI": {str(k): {"cells": [k]} for k in "abc"}, "DAGNN": {"1": {"cells": ["d"]}}}}}}
+    one = projected_hours(results, tmp_path, 1, vgai_seeds=1)
+    assert one["serial_hours"] == pytest.approx(4 + 1.5 + 0.5)  # every training and every cell, one after another
+    assert one["longest_chain_hours"] == pytest.approx(3 + 0.5)  # a then b (same first stage), then the slowest cell
+    assert projected_hours(results, tmp_path, 2, vgai_seeds=1)["projected_hours"] == pytest.approx(3.5)  # the chain
+    assert projected_hours(results, tmp_path, 1, vgai_seeds=2)["serial_hours"] == pytest.approx(0.5 + 2 * 5.5)
+    with pytest.raises(ValueError, match="positive integer"):
+        projected_hours(results, tmp_path, 0)

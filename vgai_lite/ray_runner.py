@@ -28,7 +28,9 @@ from typing import Optional
 from tqdm.auto import tqdm
 
 from .checkpoints import config_hash
+from .config import FlockConfig
 from .table_cells import cell_path, evaluate_cell, obtain
+from .vgai_config import VGAITrainConfig
 from .vgai_training import stage1_identity
 
 INSTALL = "pip install -r requirements-cluster.txt"
@@ -141,7 +143,7 @@ def projected_hours(results: dict, out: Path, machines: int, vgai_seeds: int = 3
     row, from the times recorded in a run's cells (``results``: that run's results.json, ``out`` its
     folder). The VGAI trainings and cells are scaled by vgai_seeds / the run's seeds. It is the larger
     of the work spread evenly over the machines and the longest chain of tasks that must run one
-    after the other (the VGAIs of Table 1b sharing a first stage, then their slowest cell).
+    after the other (the VGAIs sharing a first stage, Table 1b's, then the slowest cell).
     Returns hours for the serial run on one machine and the projection, with the pieces."""
     if not isinstance(machines, int) or machines < 1:
         raise ValueError(f"machines must be a positive integer, got {machines!r}")
@@ -156,9 +158,13 @@ def projected_hours(results: dict, out: Path, machines: int, vgai_seeds: int = 3
     for c in cells:
         evals[c["model"]["kind"]] += c["eval_seconds"]
     work = train["dagnn"] + evals["dagnn"] + evals["local"] + scale * (train["vgai"] + evals["vgai"])
-    chain = sum(c.get("train_seconds_recorded", 0.0) for c in models.values()
-                if c["model"]["kind"] == "vgai" and c["model"]["config"] == cells[0]["model"]["config"]
-                and c["model"]["train_config"]["F"] == 24) + max(c["eval_seconds"] for c in cells)
+    chains = {}  # the VGAIs sharing a first stage train one after another (as scheduled by run_jobs)
+    for c in models.values():
+        if c["model"]["kind"] == "vgai":
+            shared = config_hash(stage1_identity(FlockConfig(**c["model"]["config"]),
+                                                 VGAITrainConfig.from_dict(c["model"]["train_config"])))
+            chains[shared] = chains.get(shared, 0.0) + c.get("train_seconds_recorded", 0.0)
+    chain = max(chains.values(), default=0.0) + max(c["eval_seconds"] for c in cells)
     hours = max(work / machines, chain) / 3600
     return {"machines": machines, "cores": cores, "vgai_seeds": vgai_seeds, "serial_hours": work / 3600,
             "projected_hours": hours, "longest_chain_hours": chain / 3600}

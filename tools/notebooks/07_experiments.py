@@ -574,7 +574,8 @@ display(Markdown("\n".join(bullets)))
 # each cell's evaluation time), with three training seeds per VGAI row. The projection is the larger
 # of the work spread evenly over the machines and the longest chain that must run in order (the three
 # VGAIs of Table 1b that share a first stage, then the slowest cell); it ignores Ray's own overhead
-# and assumes every machine is this one.
+# and assumes every machine is this one. Some of the recorded VGAI trainings ran beside another job
+# with one thread (README, training times), so the projection errs on the slow side.
 
 # %%
 from vgai_lite.ray_runner import projected_hours
