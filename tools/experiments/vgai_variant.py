@@ -31,7 +31,7 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, VGAITrainConfig, consensus, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
-from vgai_lite.runs import VGAI_RUNS  # noqa: E402
+from vgai_lite.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -47,6 +47,9 @@ def main(argv=None) -> int:
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
     p.add_argument("--note", default="")
+    p.add_argument("--stage1-cache", default=str(STAGE1_CACHE),
+                   help="folder of cached first stages (default: the book's); a variant that leaves stage 1 "
+                        "unchanged (e.g. --aux-weight, --dagger-rounds) reuses it")
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
     changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
@@ -58,14 +61,16 @@ def main(argv=None) -> int:
         controller = load_controller(args.evaluate)
         hist, tcfg = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
     else:
-        controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False)
+        controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False,
+                                      stage1_cache=args.stage1_cache or None)
     start = time.perf_counter()
     res = relative_cost(controller, cfg, episodes=50, seed=EVAL_SEED, name=args.name)
     flock = consensus(controller, cfg, episodes=10, name=args.name)
     print(res), print(flock)
     out = {"command": " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:])),
            "note": args.note, "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
-           "train_seconds": round(hist["seconds"], 1), "evaluation_seconds": round(time.perf_counter() - start, 1),
+           "train_seconds": round(hist["seconds"], 1), "stage1_cached": hist.get("stage1_cached"),
+           "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1), "evaluation_seconds": round(time.perf_counter() - start, 1),
            "validation": hist["rounds"], **res.summary(), "consensus": flock.summary()}
     (folder / f"{args.name}.json").write_text(json.dumps(out, indent=1) + "\n")
     return 0
