@@ -17,6 +17,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from vgai_lite.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.reproduce import PAPER  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -150,8 +151,6 @@ def _tables(results: dict) -> str:
                  f"(1 thread), Ray {rq['ray_seconds']:.0f} s (2 CPUs, 1 thread per task), {rq['ray_over_serial']:.2f}x "
                  f"the serial run; tables {'identical' if rq['ray_equals_serial_1_thread'] else 'NOT identical'} "
                  "to the 1-thread serial run's.")
-    from vgai_lite.ray_runner import projected_hours
-
     proj = {m: projected_hours(results, ROOT / "data" / "results", m) for m in (1, 4, 16)}
     text += (" The full reproduction with 3 training seeds per VGAI row, projected from these cells' recorded times "
              "(`vgai_lite.ray_runner.projected_hours`, notebook 07): "
