@@ -40,10 +40,18 @@ EVAL_SEED = 2020
 """Seed of the held-out initial conditions every evaluation in the book uses; training never
 draws from it (training seeds start at 0 and stay below 1000)."""
 
-SELECTION_SEED = 3000
-"""Seed of the validation episodes on which the book picks one of several trainings of a
-configuration (``runs.choose_seed``): neither the evaluation seed nor any training or per-round
-validation seed (seed + 1000)."""
+VALIDATION_SEED = 3000
+"""Seed of the validation episodes: every design and recipe choice, and the pick of one of several
+trainings of a configuration (``runs.choose_seed``), is made on these episodes and on no others.
+Neither the test seed nor any training or per-round validation seed (seed + 1000)."""
+
+SELECTION_SEED = VALIDATION_SEED
+"""The validation seed under the name ``runs.choose_seed`` uses."""
+
+TEST_SEED = 5000
+"""Seed of the test episodes: used only for the numbers the book reports, never to choose anything
+(issue 24's protocol). EVAL_SEED's episodes (2020) were the book's held-out episodes before this
+protocol; recipes were compared on them, so they are no longer a test."""
 
 
 def prose(template: str, **values):

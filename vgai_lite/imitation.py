@@ -47,8 +47,8 @@ def dagger_mix(u_learner: torch.Tensor, u_expert: torch.Tensor, p: float,
 
 @torch.no_grad()
 def fly_dagger(learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_learner: float,
-               generator: torch.Generator, record: Callable) -> None:
-    """Fly the swarms (r0, v0) (B, N, 2) for cfg.T steps under the DAgger mixture, calling
+               generator: torch.Generator, record: Callable, steps: Optional[int] = None) -> None:
+    """Fly the swarms (r0, v0) (B, N, 2) for ``steps`` steps (default cfg.T) under the DAgger mixture, calling
     ``record(t, r, v, u_star, Z)`` at every step with the state, the expert's label and the
     learner's Z(t) (None without a learner).
 
@@ -57,7 +57,7 @@ def fly_dagger(learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_
     if learner is not None:
         learner.reset()
     r, v = r0, v0
-    for t in range(cfg.T):
+    for t in range(cfg.T if steps is None else steps):
         Z = learner.observe(r, v) if learner is not None else None
         u_star = expert_control(r, v, cfg)
         u = u_star
@@ -77,11 +77,12 @@ class EpisodeStore:
     u: list = field(default_factory=list)
 
     def fly(self, learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_learner: float,
-            generator: torch.Generator) -> None:
-        """Add the flights of (r0, v0) under the DAgger mixture (``fly_dagger``)."""
+            generator: torch.Generator, steps: Optional[int] = None) -> None:
+        """Add the flights of (r0, v0), ``steps`` steps long (default cfg.T), under the DAgger
+        mixture (``fly_dagger``)."""
         rs, vs, us = [], [], []
         fly_dagger(learner, cfg, r0, v0, p_learner, generator,
-                   lambda t, r, v, u_star, Z: (rs.append(r), vs.append(v), us.append(u_star)))
+                   lambda t, r, v, u_star, Z: (rs.append(r), vs.append(v), us.append(u_star)), steps)
         self.r.append(torch.stack(rs)), self.v.append(torch.stack(vs)), self.u.append(torch.stack(us))
 
     def tensors(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:

@@ -17,7 +17,8 @@ from .models import AggregationMLP, VGAIModel, VisualCNN
 from .vision import VisionConfig
 
 
-OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight")
+OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight", "flight_steps", "mlp_on_exact",
+                   "anchor_weight")
 """Fields added in the consensus round (notebook 06, section 6); a stored config without them had 0."""
 
 PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0}
@@ -59,7 +60,18 @@ class VGAITrainConfig:
             loss alone, eq. 10). Our choice: 5, which makes the two terms of similar size at the
             start of stage 3 (action L1 about 3 m/s², state-estimation L1 about 0.2, standardised).
 
-    The last three are stored by ``to_dict`` only when not 0: files written before they existed
+        flight_steps: steps of every stored flight (0: cfg.T, the paper's episode of 2 s). Stages 1
+            and 2 read the first cfg.T steps of each; stage 3 draws its windows over the whole
+            flight, so that the drifting a learner does after 2 s is labelled with the expert's
+            braking (issue 24, hypothesis 1).
+        mlp_on_exact: stage 2 fits the MLP on the CNN's features corrected through the aux head
+            (``exact_through_aux``) so that they read as the exact local features, as the modular
+            vision pilot's MLP learned its response on exact features (hypothesis 2).
+        anchor_weight: stage 3 adds this times the action loss of the MLP on those corrected
+            features (the CNN's features with their estimation error removed), which keeps the
+            MLP's response anchored to the exact-feature fit (hypothesis 2).
+
+    The optional fields are stored by ``to_dict`` only when not 0: files written before they existed
     had none (their meaning then: 0), so those checkpoints and table cells keep their identity.
     """
 
@@ -86,6 +98,9 @@ class VGAITrainConfig:
     synthetic_share: float = 0.5
     motion_features: Optional[int] = None
     aux_weight: float = 5.0
+    flight_steps: int = 0
+    mlp_on_exact: bool = False
+    anchor_weight: float = 0.0
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
@@ -93,6 +108,11 @@ class VGAITrainConfig:
             object.__setattr__(self, "motion_features", self.F // 3 if motion else 0)
         if not 0.0 <= self.synthetic_share <= 1.0:
             raise ValueError(f"VGAITrainConfig: synthetic_share must be in [0, 1], got {self.synthetic_share!r}")
+        if not isinstance(self.flight_steps, int) or self.flight_steps < 0:
+            raise ValueError(f"VGAITrainConfig: flight_steps must be an integer >= 0 (0: the episode's T), "
+                             f"got {self.flight_steps!r}")
+        if self.anchor_weight < 0:
+            raise ValueError(f"VGAITrainConfig: anchor_weight must be >= 0, got {self.anchor_weight!r}")
         if self.motion_features and (self.vision.motion_gap == 0 or self.vision.motion_mode != "difference"):
             raise ValueError("VGAITrainConfig: motion_features needs a motion frame in the 'difference' mode "
                              f"(got motion_gap={self.vision.motion_gap}, motion_mode={self.vision.motion_mode!r})")

@@ -85,16 +85,36 @@ def cached_stage1(cnn, cfg, tcfg, r, v, gen, progress, cache: Optional[Union[str
 # Stage 2: the MLP on the frozen CNN's features
 
 
+def exact_through_aux(cnn, X: torch.Tensor, r: torch.Tensor, v: torch.Tensor, R: float) -> torch.Tensor:
+    """The CNN's features X (..., N, F) of states r, v (..., N, 2) with their estimation error removed:
+    the features closest to X that the aux head reads as the exact local features,
+
+        X* = X + A^+ (x_exact - aux(X)),   A the aux head's (masked) weight, A^+ its pseudo-inverse,
+
+    so aux(X*) = x_exact (standardised) and the part of X the aux head does not read stays the CNN's.
+    With odd motion features A is block-diagonal (velocities from odd features only), so is A^+: the
+    velocity error is removed from the odd features, the position error from the even ones."""
+    N = r.shape[-2]
+    exact = local_features(r.reshape(-1, N, 2), v.reshape(-1, N, 2), R).view(*r.shape[:-1], 6)
+    target = (exact - cnn.aux_mean) / cnn.aux_std
+    eye = torch.eye(cnn.F, dtype=X.dtype, device=X.device)
+    A = cnn.aux_standardized(eye).T - cnn.aux_standardized(torch.zeros_like(eye[:1])).T  # (6, F)
+    return X + (target - cnn.aux_standardized(X.flatten(0, -2)).view_as(target)) @ torch.linalg.pinv(A).T
+
+
 def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
             u: torch.Tensor, gen: torch.Generator, progress: bool = True) -> list:
     """Fit NN_Theta on Z(t) built from the frozen CNN's features along stored flights r, v, u*
-    (T, E, N, 2), like the DAGNN on its exact features. Returns the mean L1 loss per epoch."""
+    (T, E, N, 2), like the DAGNN on its exact features (with ``tcfg.mlp_on_exact``, on those features
+    read as the exact ones, ``exact_through_aux``). Returns the mean L1 loss per epoch."""
     T, E = r.shape[:2]
     model.eval()
     with torch.no_grad():
         S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
         X = torch.stack([model.features(stored_images(tcfg.vision, cfg, r, v, torch.arange(E), torch.full((E,), t)))
                          for t in range(T)])  # (T, E, N, F)
+        if tcfg.mlp_on_exact:
+            X = exact_through_aux(model.cnn, X, r, v, cfg.R)
         Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
     early = min(tcfg.early_steps, T)
     keep_t = torch.cat((torch.arange(early), torch.arange(early, T, MLP_LATE_STRIDE)))
@@ -130,6 +150,11 @@ def bptt_loss(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torc
     S = gso(adjacency(r[tau_c, ee], cfg.R), tcfg.gso).view(M, K, cfg.N, cfg.N) * valid
     Z = aggregation_sequence(X * valid, S, K)[:, -1]  # Z(t) at the window's last step, (M, N, K, F)
     loss = nnf.l1_loss(model.mlp(Z), u[t_end, e])
+    if tcfg.anchor_weight:  # the MLP's response to the same windows read as exact features
+        Xa = exact_through_aux(model.cnn, X.detach(), r[tau_c, ee].view(M, K, cfg.N, 2),
+                               v[tau_c, ee].view(M, K, cfg.N, 2), cfg.R)
+        Za = aggregation_sequence(Xa * valid, S, K)[:, -1]
+        loss = loss + tcfg.anchor_weight * nnf.l1_loss(model.mlp(Za), u[t_end, e])
     if tcfg.aux_weight:
         cnn = model.cnn
         target = (local_features(r[tau_c, ee], v[tau_c, ee], cfg.R) - cnn.aux_mean) / cnn.aux_std
@@ -203,9 +228,10 @@ def _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cac
                  history["rounds"][-1]["val_relative_cost"], time.perf_counter() - start)
         save()
 
-    # Round 0: the expert flies alone; stages 1 and 2 learn from its flights.
-    store.fly(None, cfg, *sample_initial_state(cfg, tcfg.expert_episodes, gen), 0.0, gen)
-    r, v, u = store.tensors()
+    # Round 0: the expert flies alone; stages 1 and 2 learn from its flights (their first T steps).
+    steps = tcfg.flight_steps or cfg.T
+    store.fly(None, cfg, *sample_initial_state(cfg, tcfg.expert_episodes, gen), 0.0, gen, steps)
+    r, v, u = (x[:cfg.T] for x in store.tensors())
     history.update(cached_stage1(model.cnn, cfg, tcfg, r, v, gen, progress, stage1_cache))
     history["mlp_loss"] = fit_mlp(model, cfg, tcfg, r, v, u, gen, progress)
     validate("after stages 1-2")
@@ -214,7 +240,8 @@ def _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cac
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
     for rnd in range(tcfg.dagger_rounds):
         model.eval()
-        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), tcfg.p_learner, gen)
+        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), tcfg.p_learner, gen,
+                  steps)
         history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
                                              desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}")
         validate(f"DAgger round {rnd + 1}")

@@ -3,9 +3,10 @@
     python tools/experiments/vgai_variant.py --name odd8_synth0.5 --motion-features 8 --synthetic-share 0.5
 
 Trains the book's default VGAI (``runs.VGAI_RUNS["vgai_F24"]``) with the given changes, then writes
-``data/experiments/NAME.json``: the relative cost on 50 held-out episodes (seed EVAL_SEED) with the
-safety figures, and the flocking figures (velocity variance at 0.5-5 s, connectivity at 5 s) on 10
-held-out 500-step flights. The checkpoint goes to ``data/experiments/NAME.pt`` (not a shipped
+``data/experiments/NAME.json``: the relative cost on ``--episodes`` validation episodes (seed
+book.VALIDATION_SEED: variants are choices, so they are compared on validation episodes, never on
+the test episodes) with the safety figures and the flocking figures (velocity variance at 2 and
+5 s, connectivity at 5 s), and the record's provenance (``vgai_lite.provenance``). The checkpoint goes to ``data/experiments/NAME.pt`` (not a shipped
 model), so a record and its controller can be checked against each other.
 
     python tools/experiments/vgai_variant.py --name vgai_F24_plain --evaluate data/experiments/vgai_F24_plain.pt
@@ -21,7 +22,6 @@ import argparse
 import dataclasses
 import json
 import sys
-import time
 from pathlib import Path
 
 import torch
@@ -29,8 +29,9 @@ import torch
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from vgai_lite import FlockConfig, VGAITrainConfig, consensus, load_controller, relative_cost, train_vgai  # noqa: E402
-from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
+from vgai_lite import FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
+from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
+from vgai_lite.provenance import Provenance  # noqa: E402
 from vgai_lite.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
 
 
@@ -44,6 +45,11 @@ def main(argv=None) -> int:
     p.add_argument("--early-share", type=float, default=None)
     p.add_argument("--dagger-rounds", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--flight-steps", type=int, default=None, help="steps of every stored flight (hypothesis 1)")
+    p.add_argument("--mlp-on-exact", action="store_true", default=None,
+                   help="stage 2 on the CNN's features read as the exact ones (hypothesis 2)")
+    p.add_argument("--anchor-weight", type=float, default=None, help="stage 3 anchor loss (hypothesis 2)")
+    p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
     p.add_argument("--note", default="")
@@ -54,24 +60,30 @@ def main(argv=None) -> int:
     torch.set_num_threads(args.threads)
     changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
-                                 ("dagger_rounds", args.dagger_rounds), ("seed", args.seed)) if v is not None}
+                                 ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
+                                 ("flight_steps", args.flight_steps), ("mlp_on_exact", args.mlp_on_exact),
+                                 ("anchor_weight", args.anchor_weight)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
     folder = DATA_DIR / "experiments"
-    if args.evaluate:
-        controller = load_controller(args.evaluate)
-        hist, tcfg = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
-    else:
-        controller, hist = train_vgai(cfg, tcfg, checkpoint=folder / f"{args.name}.pt", progress=False,
-                                      stage1_cache=args.stage1_cache or None)
-    start = time.perf_counter()
-    res = relative_cost(controller, cfg, episodes=50, seed=EVAL_SEED, name=args.name)
-    flock = consensus(controller, cfg, episodes=10, name=args.name)
-    print(res), print(flock)
-    out = {"command": " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:])),
-           "note": args.note, "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
+    command = " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:]))
+    ckpt = Path(args.evaluate) if args.evaluate else folder / f"{args.name}.pt"
+    with Provenance(command) as train_prov:
+        if args.evaluate:
+            controller = load_controller(ckpt)
+            hist, tcfg = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
+        else:
+            controller, hist = train_vgai(cfg, tcfg, checkpoint=ckpt, progress=False,
+                                          stage1_cache=args.stage1_cache or None)
+    with Provenance(command) as eval_prov:
+        res = relative_cost(controller, cfg, episodes=args.episodes, seed=VALIDATION_SEED, name=args.name)
+    print(res)
+    out = {"command": command, "note": args.note, "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
            "train_seconds": round(hist["seconds"], 1), "stage1_cached": hist.get("stage1_cached"),
-           "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1), "evaluation_seconds": round(time.perf_counter() - start, 1),
-           "validation": hist["rounds"], **res.summary(), "consensus": flock.summary()}
+           "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
+           "evaluation_seconds": round(eval_prov.seconds, 1), "validation": hist["rounds"], **res.summary(),
+           "provenance": {"training": None if args.evaluate else train_prov.record(),
+                          "evaluation": eval_prov.record(checkpoint=ckpt, seed=VALIDATION_SEED,
+                                                         episodes=args.episodes)}}
     (folder / f"{args.name}.json").write_text(json.dumps(out, indent=1) + "\n")
     return 0
 
