@@ -42,8 +42,18 @@ class CheckResult:
         return f"[{mark}] exercise {self.exercise} ({EXERCISES.get(self.exercise, '?')}): {self.message}"
 
 
+class AnswerMismatch(Exception):
+    """Raised by a check's own tests (a shape, a type): the answer is not what was expected. Reported
+    as what was expected, not as an error of the student's function."""
+
+
 def _fresh_generator() -> torch.Generator:
     return torch.Generator().manual_seed(int.from_bytes(os.urandom(6), "little"))
+
+
+def _close(got: torch.Tensor, want: torch.Tensor) -> bool:
+    """Equal up to float32 rounding: an answer computed in float32, or in another order, passes."""
+    return torch.allclose(got.to(want.dtype), want, rtol=1e-4, atol=1e-6)
 
 
 def _fmt(x: torch.Tensor) -> str:
@@ -107,6 +117,8 @@ def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
         passed, message = body()
     except NotImplementedError:
         passed, message = False, "not implemented yet: replace the `raise NotImplementedError` with your code."
+    except AnswerMismatch as exc:  # the check's own test failed: say what was expected
+        passed, message = False, str(exc)
     except Exception as exc:  # the student's code raised: report it, do not crash the notebook
         tb = traceback.extract_tb(exc.__traceback__)[-1]
         passed, message = False, (f"your function raised {type(exc).__name__}: {exc} "
@@ -119,10 +131,10 @@ def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
 
 def _as_tensor(got, shape, what: str) -> torch.Tensor:
     if not isinstance(got, torch.Tensor):
-        raise TypeError(f"expected {what} as a torch.Tensor of shape {tuple(shape)}, "
-                        f"your function returned a {type(got).__name__}")
+        raise AnswerMismatch(f"expected {what} as a torch.Tensor of shape {tuple(shape)}, "
+                             f"your function returned a {type(got).__name__}")
     if tuple(got.shape) != tuple(shape):
-        raise ValueError(f"expected {what} of shape {tuple(shape)}, got shape {tuple(got.shape)}")
+        raise AnswerMismatch(f"expected {what} of shape {tuple(shape)}, got shape {tuple(got.shape)}")
     return got.detach().to(torch.float64)
 
 
@@ -141,7 +153,7 @@ def check_potential_gradient(student_fn: Callable) -> CheckResult:
         expected = potential_gradient(r_ij, FlockConfig(rho=rho))
         got = _as_tensor(student_fn(r_ij.clone(), rho), expected.shape, "the gradient")
         err = (got - expected).norm(dim=-1)
-        tol = 1e-6 + 1e-5 * expected.norm(dim=-1)
+        tol = 1e-6 + 1e-4 * expected.norm(dim=-1)
         if bool((err <= tol).all()):
             return True, f"matches eq. 3's gradient on {M} random offsets (rho = {rho:.2f} m)."
         k = int((err - tol).argmax())
@@ -166,7 +178,7 @@ def check_flocking_cost(student_fn: Callable) -> CheckResult:
         v = 3 * torch.randn(T, B, N, 2, generator=g, dtype=torch.float64) + torch.randn(2, generator=g, dtype=torch.float64)
         expected = flocking_cost(v)
         got = _as_tensor(student_fn(v.clone()), expected.shape, "the cost per swarm")
-        if torch.allclose(got, expected, rtol=1e-6, atol=1e-9):
+        if _close(got, expected):
             return True, f"matches eq. 1 on random trajectories (T={T}, B={B}, N={N})."
         k = int((got - expected).abs().argmax())
         ratio = (got[k] / expected[k]).item()
@@ -197,31 +209,51 @@ def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
     """
     def body():
         g = _fresh_generator()
-        T, N, F = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(8, 15, (1,), generator=g)), 3
-        K = int(torch.randint(3, T + 1, (1,), generator=g))
-        for _ in range(50):  # a window whose graph changes at every step, so S(t) S(t-1) != S(t)^2
-            S = gso(adjacency(_random_swarm_sequence(g, T, N, step=0.3), 1.5))
-            if all(not torch.equal(S[t], S[t - 1]) for t in range(1, T)):
-                break
-        X = torch.randn(T, N, F, generator=g, dtype=torch.float64)
-        expected = aggregation_sequence(X[None], S[None], K)[0, -1]
-        got = _as_tensor(student_fn(X.clone(), S.clone(), K), expected.shape, "Z(t)")
-        if torch.allclose(got, expected, rtol=1e-6, atol=1e-9):
-            return True, f"matches eq. 6 on a random window (T={T}, N={N}, F={F}, K={K})."
-        bad = [k for k in range(K) if not torch.allclose(got[:, k], expected[:, k], rtol=1e-6, atol=1e-9)]
-        k = bad[0]
-        hint = ""
-        if k == 0:
-            hint = " Block 0 is the agents' own current features X(t)."
-        elif torch.allclose(got[:, k], torch.linalg.matrix_power(S[-1], k) @ X[-1 - k], rtol=1e-6):
-            hint = (" You used S(t)^k; the graph changes over time: block k uses "
-                    "S(t) S(t-1) ... S(t-k+1).")
-        elif torch.allclose(got[:, k], torch.linalg.matrix_power(S[-1], k) @ X[-1], rtol=1e-6):
-            hint = " Block k uses the features of k steps ago, X(t-k): information arrives late."
-        return False, (f"block k={k} (of K={K}) differs on a window with T={T}, N={N}: expected "
-                       f"row 0 = {_fmt(expected[0, k])}, got {_fmt(got[0, k])}.{hint}")
+        # two windows: one longer than K, one shorter (K > T: blocks from before t = 0 must be zero)
+        for short in (False, True):
+            passed, message = _one_aggregation_window(student_fn, g, short)
+            if not passed:
+                return passed, message
+        return True, message
 
     return _run("02.1", body)
+
+
+def _one_aggregation_window(student_fn, g, short: bool):
+    T, N, F = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(8, 15, (1,), generator=g)), 3
+    K = int(torch.randint(T + 1, T + 4, (1,), generator=g)) if short else int(torch.randint(3, T + 1, (1,), generator=g))
+    for _ in range(50):  # a window whose graph changes at every step, so S(t) S(t-1) != S(t)^2
+        S = gso(adjacency(_random_swarm_sequence(g, T, N, step=0.3), 1.5))
+        if all(not torch.equal(S[t], S[t - 1]) for t in range(1, T)):
+            break
+    X = torch.randn(T, N, F, generator=g, dtype=torch.float64)
+    expected = aggregation_sequence(X[None], S[None], K)[0, -1]
+    got = _as_tensor(student_fn(X.clone(), S.clone(), K), expected.shape, "Z(t)")
+    if _close(got, expected):
+        return True, f"matches eq. 6 on random windows (T={T}, N={N}, F={F}, K={K}: K > T, zeros before t = 0)."
+    bad = [k for k in range(K) if not _close(got[:, k], expected[:, k])]
+    k = bad[0]
+    t = T - 1
+    hint = ""
+    if k == 0:
+        hint = " Block 0 is the agents' own current features X(t)."
+    elif t - k < 0:
+        hint = (f" Block {k} would need X({t - k}), before the flight began: nothing was sent then, so the block"
+                " is zero (careful: X[t - k] with a negative index wraps around to the window's end).")
+    elif _close(got[:, k], torch.linalg.matrix_power(S[-1], k) @ X[-1 - k]):
+        hint = (" You used S(t)^k; the graph changes over time: block k uses "
+                "S(t) S(t-1) ... S(t-k+1).")
+    elif _close(got[:, k], torch.linalg.matrix_power(S[-1], k) @ X[-1]):
+        hint = " Block k uses the features of k steps ago, X(t-k): information arrives late."
+    else:
+        prod = X[t - k]
+        for s_ in range(t, t - k, -1):  # S(t) applied first: the product in reverse order
+            prod = S[s_] @ prod
+        if _close(got[:, k], prod):
+            hint = (" The product is in reverse order: X(t-k) is first multiplied by S(t-k+1), the graph of"
+                    " the step after it was sent, and by S(t) last.")
+    return False, (f"block k={k} (of K={K}) differs on a window with T={T}, N={N} (t = {t}): expected "
+                   f"row 0 = {_fmt(expected[0, k])}, got {_fmt(got[0, k])}.{hint}")
 
 
 def check_local_features(student_fn: Callable) -> CheckResult:
@@ -235,7 +267,7 @@ def check_local_features(student_fn: Callable) -> CheckResult:
         R = 1.0 + torch.rand(1, generator=g, dtype=torch.float64).item()
         expected = local_features(r[None], v[None], R)[0]
         got = _as_tensor(student_fn(r.clone(), v.clone(), R), expected.shape, "X")
-        if torch.allclose(got, expected, rtol=1e-6, atol=1e-9):
+        if _close(got, expected):
             return True, f"matches the 6 local features on a random swarm (N={N}, R={R:.2f} m)."
         i = int((got - expected).abs().amax(-1).argmax())
         names = ("sum (v_i - v_j)", "sum r_ij/|r_ij|^4", "sum r_ij/|r_ij|^2")
@@ -266,7 +298,7 @@ def check_pinhole(student_fn: Callable) -> CheckResult:
             h_exp = 2 * rcfg.focal_vertical * (rcfg.body_height / 2) / (d - rcfg.body_radius)
             got = student_fn(theta, d, rcfg)
             if not (isinstance(got, tuple) and len(got) == 2):
-                raise TypeError(f"expected a tuple (u, height), got {type(got).__name__}")
+                raise AnswerMismatch(f"expected a tuple (u, height), got {type(got).__name__}")
             u, h = (float(x) for x in got)
             cam = int(u_exp // rcfg.view_width)
             if abs(u - u_exp) > 1e-6:
@@ -287,19 +319,40 @@ def check_pinhole(student_fn: Callable) -> CheckResult:
     return _run("04.1", body)
 
 
+def _module(obj, what: str) -> torch.nn.Module:
+    if not isinstance(obj, torch.nn.Module):
+        raise AnswerMismatch(f"expected {what} to be an nn.Module, got {type(obj).__name__}")
+    return obj
+
+
+def _column_reach(block, x: torch.Tensor) -> int:
+    """How many columns to each side a change of one column (in the middle) reaches, (M, C, H, W)."""
+    W = x.shape[-1]
+    j = W // 2
+    x2 = x.clone()
+    x2[..., j] += 5.0
+    with torch.no_grad():
+        change = (block(x2) - block(x)).abs().amax(dim=(0, 1, 2))
+    cols = [c for c in range(W) if change[c] > 1e-6]
+    return max(abs(c - j) for c in cols) if cols else -1
+
+
 def check_residual_block(student_cls: Callable) -> CheckResult:
     """Exercise 05.1: ``student_cls(c_in, c_out, pool)`` builds an nn.Module whose forward maps
-    (M, c_in, H, W) to (M, c_out, H / pool, W): two 3x3 convolutions with a skip connection, then
-    average pooling of ``pool`` rows into one, the columns untouched."""
+    (M, c_in, H, W) to (M, c_out, H / pool, W): two 3x3 convolutions (nn.Conv2d) with a skip
+    connection (the identity when c_in = c_out, else a 1x1 convolution), a ReLU, then average pooling
+    of ``pool`` rows into one, the columns untouched:  y = pool_rows(relu(conv2(relu(conv1 x)) + skip x)).
+
+    Tested as behaviour, whatever the layout: output shapes; a column reaches exactly two columns
+    to each side (two 3x3 convolutions, not one); and with the 3x3 convolutions' weights and biases
+    set to zero (and a 1x1 skip set to the identity), what is left is pool_rows(relu(x)) exactly:
+    the skip is there, the ReLU comes before the pooling, and the pooling averages."""
     def body():
         g = _fresh_generator()
-        for _ in range(3):
-            c_in, c_out = (int(x) for x in torch.randint(1, 6, (2,), generator=g))
-            pool = int(torch.randint(1, 4, (1,), generator=g))
-            H, W, M = pool * int(torch.randint(1, 5, (1,), generator=g)), int(torch.randint(8, 40, (1,), generator=g)), 3
-            block = student_cls(c_in, c_out, pool)
-            if not isinstance(block, torch.nn.Module):
-                raise TypeError(f"expected an nn.Module, got {type(block).__name__}")
+        for c_in, c_out in ((2, 2), (int(torch.randint(1, 4, (1,), generator=g)), int(torch.randint(4, 7, (1,), generator=g)))):
+            pool = int(torch.randint(2, 4, (1,), generator=g))
+            H, W, M = pool * int(torch.randint(1, 4, (1,), generator=g)), int(torch.randint(12, 40, (1,), generator=g)), 3
+            block = _module(student_cls(c_in, c_out, pool), "the block")
             x = torch.randn(M, c_in, H, W, generator=g, requires_grad=True)
             y = block(x)
             want = (M, c_out, H // pool, W)
@@ -315,15 +368,47 @@ def check_residual_block(student_cls: Callable) -> CheckResult:
             y.sum().backward()
             if x.grad is None or x.grad.abs().sum() == 0:
                 return False, "the output does not depend on the input (no gradient reaches it)."
-            # columns far apart do not mix: two 3x3 convolutions see at most 2 columns to each side
-            x2 = x.detach().clone()
-            x2[..., -1] += 5.0
+            reach = _column_reach(block, x.detach())
+            if reach != 2:
+                hint = {1: " That is one 3x3 convolution's reach: the block has two, one after the other.",
+                        0: " Columns do not see their neighbours: the convolutions are 3x3 with padding 1."}.get(
+                    reach, " Keep the convolutions 3x3 and do not pool or mix across columns.")
+                return False, (f"a change in one column reached {reach} columns to each side; two 3x3 convolutions "
+                               f"in a row reach exactly 2.{hint}")
+            convs = [m for m in block.modules() if isinstance(m, torch.nn.Conv2d)]
+            wide = [m for m in convs if tuple(m.kernel_size) == (3, 3)]
+            if len(wide) != 2:
+                return False, (f"expected two 3x3 nn.Conv2d layers in the block, found {len(wide)}: "
+                               "use nn.Conv2d(..., 3, padding=1) for both convolutions.")
             with torch.no_grad():
-                change = (block(x2) - block(x.detach())).abs().amax(dim=(0, 1, 2))
-            if W > 6 and change[: W - 3].max() > 1e-5:
-                return False, ("changing the last column changed columns far from it: keep the convolutions "
-                               "local (3x3) and do not pool or mix across columns.")
-        return True, "right output shapes, rows pooled, columns kept, and a column only sees its neighbours."
+                for m in wide:
+                    m.weight.zero_()
+                    if m.bias is not None:
+                        m.bias.zero_()
+                for m in convs:
+                    if tuple(m.kernel_size) == (1, 1) and m.in_channels == m.out_channels == c_in == c_out:
+                        m.weight.copy_(torch.eye(c_in)[:, :, None, None])
+                        if m.bias is not None:
+                            m.bias.zero_()
+                if c_in != c_out:
+                    continue
+                xs = x.detach()
+                left = block(xs)
+                rows = torch.relu(xs).unflatten(2, (H // pool, pool))
+                if not torch.allclose(left, rows.mean(3), atol=1e-5):
+                    hint = ""
+                    if left.abs().max() < 1e-6:
+                        hint = " Nothing is left: the skip connection (adding the input back) is missing."
+                    elif torch.allclose(left, rows.amax(3), atol=1e-5):
+                        hint = " That is max pooling: the block averages the rows (nn.AvgPool2d((pool, 1)))."
+                    elif torch.allclose(left, torch.relu(xs.unflatten(2, (H // pool, pool)).mean(3)), atol=1e-5):
+                        hint = " The ReLU comes before the pooling: pool_rows(relu(... + skip x))."
+                    elif torch.allclose(left, xs.unflatten(2, (H // pool, pool)).mean(3), atol=1e-5):
+                        hint = " The ReLU after the sum is missing: pool_rows(relu(conv2(...) + skip x))."
+                    return False, ("with its 3x3 convolutions set to zero a residual block leaves "
+                                   f"pool_rows(relu(x)) (c_in = c_out = {c_in}, pool = {pool}); yours differs.{hint}")
+        return True, ("right shapes, rows pooled by averaging, columns kept, two 3x3 convolutions' reach, "
+                      "and the skip connection carries the input.")
 
     return _run("05.1", body)
 
@@ -350,6 +435,21 @@ def check_dagger_mix(student_fn: Callable) -> CheckResult:
             share = is_l.all(dim=1).double().mean().item()
             if abs(share - p) > 0.03:
                 return False, f"with p = {p} your swarms followed the learner {share:.0%} of the time."
-        return True, "one coin per swarm, learner with probability p, expert otherwise."
+        # reproducible: the coins come from the generator given, not from torch's global one
+        seed = int(torch.randint(0, 2 ** 31, (1,), generator=g))
+        runs = []
+        for global_seed in (1, 2):
+            torch.manual_seed(global_seed + seed)  # stir the global generator between the two runs
+            runs.append(_as_tensor(student_fn(u_l.clone(), u_e.clone(), 0.5, torch.Generator().manual_seed(seed)),
+                                   u_l.shape, "the applied actions"))
+        if not torch.equal(runs[0], runs[1]):
+            return False, ("two calls with generators seeded alike gave different coins: draw them from the "
+                           "`generator` argument (e.g. torch.rand(B, generator=generator)), not from torch's "
+                           "global random state, so that a training run can be reproduced.")
+        other = _as_tensor(student_fn(u_l.clone(), u_e.clone(), 0.5, torch.Generator().manual_seed(seed + 1)),
+                           u_l.shape, "the applied actions")
+        if torch.equal(other, runs[0]):
+            return False, "generators seeded differently gave the very same coins: the coins must be random."
+        return True, "one coin per swarm from the generator given, learner with probability p, expert otherwise."
 
     return _run("06.1", body)

@@ -16,7 +16,7 @@ from typing import Callable
 import torch
 
 from .consensus import velocity_variance
-from .exercises import CheckResult, _as_tensor, _fresh_generator, _run
+from .exercises import CheckResult, _as_tensor, _close, _fresh_generator, _run
 
 
 def check_circular_conv(student_cls: Callable) -> CheckResult:
@@ -28,7 +28,7 @@ def check_circular_conv(student_cls: Callable) -> CheckResult:
         g = _fresh_generator()
         for _ in range(3):
             c_in, c_out = (int(x) for x in torch.randint(1, 5, (2,), generator=g))
-            H, W = int(torch.randint(1, 4, (1,), generator=g)), int(torch.randint(8, 40, (1,), generator=g))
+            H, W = int(torch.randint(3, 6, (1,), generator=g)), int(torch.randint(8, 40, (1,), generator=g))
             layer = student_cls(c_in, c_out)
             if not isinstance(layer, torch.nn.Module):
                 raise TypeError(f"expected an nn.Module, got {type(layer).__name__}")
@@ -43,6 +43,12 @@ def check_circular_conv(student_cls: Callable) -> CheckResult:
                 x2 = x.clone()
                 x2[..., 0] += 3.0
                 change = (_as_tensor(layer(x2), y.shape, "the output") - y).abs().amax(dim=(0, 1, 2))
+                x3 = x.clone()
+                x3[:, :, 0] += 3.0  # the first row only
+                rows = (_as_tensor(layer(x3), y.shape, "the output") - y).abs().amax(dim=(0, 1, 3))
+            if rows[1:].max() > 1e-6:
+                return False, ("changing the first row changed other rows: the convolution runs along the columns "
+                               "only (a 1x3 kernel), and a row is not a circle: never wrap the rows.")
             near = {W - 1, 0, 1}
             if any(change[j] > 1e-6 for j in range(W) if j not in near):
                 return False, "changing column 0 changed columns other than its two neighbours (the last column and column 1): keep the kernel 1x3."
@@ -94,18 +100,26 @@ def check_variance_at(student_fn: Callable) -> CheckResult:
     round(seconds / Ts) of velocities v (T, B, N, 2)."""
     def body():
         g = _fresh_generator()
-        T, B, N = int(torch.randint(20, 60, (1,), generator=g)), 3, int(torch.randint(3, 9, (1,), generator=g))
+        T, B, N = int(torch.randint(60, 120, (1,), generator=g)), 3, int(torch.randint(3, 9, (1,), generator=g))
         v = torch.randn(T, B, N, 2, generator=g, dtype=torch.float64)
         Ts = 0.01
-        for step in (0, T // 2, T - 1):
+        # times a student types (0.29 s) whose quotient by Ts is not a whole number in floating point:
+        # 0.29 / 0.01 = 28.999999999999996 (int() picks step 28) and 0.07 / 0.01 = 7.000000000000001
+        below = [k for k in range(1, T) if round(k * Ts, 10) / Ts < k]
+        above = [k for k in range(1, T) if round(k * Ts, 10) / Ts > k]
+        pick = lambda ks: ks[int(torch.randint(0, len(ks), (1,), generator=g))]
+        for step in (0, T - 1, pick(below), pick(above)):
             want = velocity_variance(v)[step]
-            got = _as_tensor(student_fn(v.clone(), Ts, step * Ts), (B,), "one variance per flight")
-            if (got - want).abs().max() > 1e-8:
+            got = _as_tensor(student_fn(v.clone(), Ts, round(step * Ts, 10)), (B,), "one variance per flight")
+            if not _close(got, want):
                 hint = ""
-                if (got - want * N / (N - 1)).abs().max() < 1e-8:
+                if _close(got, want * N / (N - 1)):
                     hint = " Divide by N, not N - 1."
-                elif (got - (v[step] ** 2).sum(-1).mean(-1)).abs().max() < 1e-8:
+                elif _close(got, (v[step] ** 2).sum(-1).mean(-1)):
                     hint = " Subtract the swarm's mean velocity first."
+                elif any(_close(got, velocity_variance(v)[k]) for k in (step - 1, step + 1) if 0 <= k < T):
+                    hint = (f" That is the variance one step off: {step * Ts:.2f} / {Ts} = {step * Ts / Ts!r} in "
+                            "floating point; round it to the nearest step, round(seconds / Ts), do not truncate.")
                 return False, f"at {step * Ts:.2f} s (step {step}) expected {want.tolist()}, got {got.tolist()}.{hint}"
         return True, "the variance of every flight at any time, as eq. 1 sums it."
 

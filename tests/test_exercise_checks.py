@@ -1,0 +1,266 @@
+"""The exercise checks as tests of the student (issue 25): every plausible wrong answer fails on every
+run, every correct answer passes however it is written. Each check draws fresh random inputs, so each
+case runs several times."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import torch
+import torch.nn.functional as nnf
+from torch import nn
+
+from vgai_lite.exercises import (check_aggregation_sequence, check_dagger_mix, check_residual_block)
+from vgai_lite.experiment_exercises import check_circular_conv, check_variance_at
+
+REPEATS = 5
+
+
+def passes(check, answer) -> list[bool]:
+    return [bool(check(answer)) for _ in range(REPEATS)]
+
+
+# ---------------------------------------------------------------------------------------------
+# 02.1: Z(t)
+
+def z_loop(X, S, K, wrap=False, reverse=False, dtype=None):
+    T = X.shape[0]
+    t = T - 1
+    blocks = []
+    for k in range(K):
+        if t - k < 0 and not wrap:
+            blocks.append(torch.zeros_like(X[0]))
+            continue
+        block = X[t - k]
+        order = range(t, t - k, -1) if reverse else range(t - k + 1, t + 1)
+        for s in order:
+            block = S[s] @ block
+        blocks.append(block)
+    return torch.stack(blocks, dim=1)
+
+
+def z_recursive_float32(X, S, K):
+    """Correct, written another way: the recursion Z_k(t) = S(t) Z_{k-1}(t-1), in float32."""
+    X, S = X.float(), S.float()
+    T, N, F = X.shape
+
+    def Zk(k, t):
+        if t < 0:
+            return torch.zeros(N, F)
+        return X[t] if k == 0 else S[t] @ Zk(k - 1, t - 1)
+
+    return torch.stack([Zk(k, T - 1) for k in range(K)], dim=1)
+
+
+def z_padded(X, S, K):
+    """Correct: pad the history with K zeros, then the product from the left."""
+    T, N, F = X.shape
+    Xp = torch.cat((torch.zeros(K, N, F, dtype=X.dtype), X))
+    Sp = torch.cat((torch.zeros(K, N, N, dtype=S.dtype), S))
+    t = T - 1 + K
+    out = []
+    for k in range(K):
+        z = Xp[t - k]
+        for s in range(t - k + 1, t + 1):
+            z = Sp[s] @ z
+        out.append(z)
+    return torch.stack(out, 1)
+
+
+@pytest.mark.parametrize("answer", [z_loop, z_recursive_float32, z_padded], ids=["loop", "recursion-float32", "padded"])
+def test_02_1_passes_correct_answers(answer):
+    assert all(passes(check_aggregation_sequence, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda X, S, K: z_loop(X, S, K, wrap=True), "negative index wraps"),
+    (lambda X, S, K: z_loop(X, S, K, reverse=True), "product in reverse order"),
+    (lambda X, S, K: torch.stack([torch.linalg.matrix_power(S[-1], k) @ X[-1 - k] if k < X.shape[0]
+                                  else torch.zeros_like(X[0]) for k in range(K)], 1), "S(t)^k"),
+    (lambda X, S, K: torch.stack([torch.linalg.matrix_power(S[-1], k) @ X[-1] for k in range(K)], 1), "no delay"),
+])
+def test_02_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_aggregation_sequence, answer)), why
+
+
+def test_02_1_names_the_wrap_around():
+    msg = check_aggregation_sequence(lambda X, S, K: z_loop(X, S, K, wrap=True)).message
+    assert "wraps around" in msg
+
+
+# ---------------------------------------------------------------------------------------------
+# 05.1: the residual block
+
+class Block(nn.Module):
+    def __init__(self, c_in, c_out, pool, skip=True, pooling="avg", convs=2, relu_after_pool=False,
+                 always_1x1=False):
+        super().__init__()
+        self.conv1 = nn.Conv2d(c_in, c_out, 3, padding=1)
+        self.conv2 = nn.Conv2d(c_out, c_out, 3, padding=1) if convs == 2 else None
+        self.skip = nn.Conv2d(c_in, c_out, 1) if (c_in != c_out or always_1x1) else nn.Identity()
+        self.use_skip, self.pooling, self.pool_rows, self.relu_after_pool = skip, pooling, pool, relu_after_pool
+
+    def forward(self, x):
+        y = self.conv1(x)
+        if self.conv2 is not None:
+            y = self.conv2(torch.relu(y))
+        if self.use_skip:
+            y = y + self.skip(x)
+        if not self.relu_after_pool:
+            y = torch.relu(y)
+        pool = nnf.avg_pool2d if self.pooling == "avg" else nnf.max_pool2d
+        y = pool(y, (self.pool_rows, 1))
+        return torch.relu(y) if self.relu_after_pool else y
+
+
+class SequentialBlock(nn.Module):
+    """Correct, another layout: the branch as an nn.Sequential, pooling by reshaping and averaging."""
+
+    def __init__(self, c_in, c_out, pool):
+        super().__init__()
+        self.branch = nn.Sequential(nn.Conv2d(c_in, c_out, kernel_size=(3, 3), padding=(1, 1)), nn.ReLU(),
+                                    nn.Conv2d(c_out, c_out, kernel_size=3, padding="same"))
+        self.shortcut = nn.Conv2d(c_in, c_out, kernel_size=1, bias=False) if c_in != c_out else None
+        self.pool = pool
+
+    def forward(self, x):
+        s = x if self.shortcut is None else self.shortcut(x)
+        y = nnf.relu(self.branch(x) + s)
+        M, C, H, W = y.shape
+        return y.view(M, C, H // self.pool, self.pool, W).mean(3)
+
+
+@pytest.mark.parametrize("answer", [
+    lambda ci, co, p: Block(ci, co, p),
+    lambda ci, co, p: Block(ci, co, p, always_1x1=True),
+    SequentialBlock,
+], ids=["library-like", "1x1-skip-always", "sequential-reshape"])
+def test_05_1_passes_correct_answers(answer):
+    assert all(passes(check_residual_block, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda ci, co, p: Block(ci, co, p, skip=False), "no skip connection"),
+    (lambda ci, co, p: Block(ci, co, p, pooling="max"), "max pooling"),
+    (lambda ci, co, p: Block(ci, co, p, convs=1), "one convolution"),
+    (lambda ci, co, p: Block(ci, co, p, relu_after_pool=True), "ReLU after the pooling"),
+])
+def test_05_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_residual_block, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 06.1: DAgger's coin
+
+def mix_library(u_l, u_e, p, generator):
+    follow = torch.rand(u_e.shape[0], generator=generator) < p
+    return torch.where(follow[:, None, None], u_l, u_e)
+
+
+def mix_bernoulli_loop(u_l, u_e, p, generator):
+    """Correct, another way: a Bernoulli draw per swarm, a loop."""
+    coins = torch.bernoulli(torch.full((u_e.shape[0],), float(p)), generator=generator)
+    out = u_e.clone()
+    for b in range(u_e.shape[0]):
+        if coins[b] == 1:
+            out[b] = u_l[b]
+    return out
+
+
+@pytest.mark.parametrize("answer", [mix_library, mix_bernoulli_loop])
+def test_06_1_passes_correct_answers(answer):
+    assert all(passes(check_dagger_mix, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda u_l, u_e, p, generator: mix_library(u_l, u_e, p, None), "global generator"),
+    (lambda u_l, u_e, p, generator: torch.where((torch.rand(u_e.shape[:2], generator=generator) < p)[..., None],
+                                                u_l, u_e), "one coin per agent"),
+    (lambda u_l, u_e, p, generator: p * u_l + (1 - p) * u_e, "a blend"),
+    (lambda u_l, u_e, p, generator: mix_library(u_l, u_e, 1 - p, generator), "p for the expert"),
+])
+def test_06_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_dagger_mix, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 05.2: the convolution that wraps around
+
+class Circular(nn.Module):
+    def __init__(self, c_in, c_out, kernel=(1, 3), rows_too=False, pad_mode="circular"):
+        super().__init__()
+        self.conv = nn.Conv2d(c_in, c_out, kernel)
+        self.rows_too, self.pad_mode = rows_too, pad_mode
+
+    def forward(self, x):
+        pad = (1, 1, 1, 1) if self.rows_too else (1, 1, 0, 0)
+        return self.conv(nnf.pad(x, pad, mode=self.pad_mode))
+
+
+class CircularByCat(nn.Module):
+    """Correct, another way: concatenate the last and first columns, then a 1x3 convolution."""
+
+    def __init__(self, c_in, c_out):
+        super().__init__()
+        self.conv = nn.Conv2d(c_in, c_out, (1, 3))
+
+    def forward(self, x):
+        return self.conv(torch.cat((x[..., -1:], x, x[..., :1]), dim=-1))
+
+
+@pytest.mark.parametrize("answer", [lambda ci, co: Circular(ci, co), CircularByCat,
+                                    lambda ci, co: nn.Conv2d(ci, co, (1, 3), padding=(0, 1), padding_mode="circular")],
+                         ids=["pad-circular", "cat", "padding_mode"])
+def test_05_2_passes_correct_answers(answer):
+    assert all(passes(check_circular_conv, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda ci, co: Circular(ci, co, kernel=(3, 3), rows_too=True), "3x3 circular in both directions"),
+    (lambda ci, co: Circular(ci, co, pad_mode="constant"), "zero padding"),
+    (lambda ci, co: Circular(ci, co, pad_mode="replicate"), "replicate padding"),
+])
+def test_05_2_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_circular_conv, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 07.1: the variance at a time
+
+def variance_at(v, Ts, seconds, index=round, ddof=0, center=True):
+    step = index(seconds / Ts)
+    w = v[step]
+    if center:
+        w = w - w.mean(1, keepdim=True)
+    N = v.shape[2]
+    return w.square().sum(-1).sum(-1) / (N - ddof)
+
+
+@pytest.mark.parametrize("answer", [
+    variance_at,
+    lambda v, Ts, s: v[int(s / Ts + 0.5)].float().var(dim=1, unbiased=False).sum(-1),
+], ids=["round", "int+0.5-float32-var"])
+def test_07_1_passes_correct_answers(answer):
+    assert all(passes(check_variance_at, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda v, Ts, s: variance_at(v, Ts, s, index=int), "int truncates"),
+    (lambda v, Ts, s: variance_at(v, Ts, s, index=math.floor), "floor"),
+    (lambda v, Ts, s: variance_at(v, Ts, s, index=math.ceil), "ceil"),
+    (lambda v, Ts, s: variance_at(v, Ts, s, ddof=1), "N - 1"),
+    (lambda v, Ts, s: variance_at(v, Ts, s, center=False), "not centred"),
+])
+def test_07_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_variance_at, answer)), why
+
+
+def test_07_1_says_why_truncation_fails():
+    msg = check_variance_at(lambda v, Ts, s: variance_at(v, Ts, s, index=int)).message
+    assert "round(seconds / Ts)" in msg
+
+
+def test_a_checks_own_shape_test_is_not_reported_as_the_students_error():
+    msg = check_variance_at(lambda v, Ts, s: variance_at(v, Ts, s)[None]).message
+    assert "expected one variance per flight of shape" in msg and "raised" not in msg
