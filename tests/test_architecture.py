@@ -10,7 +10,7 @@ import torch
 
 import vgai_lite as vl
 from vgai_lite.book import DATA_DIR, EVAL_SEED
-from vgai_lite.exercises import check_dagger_mix
+from vgai_lite.method_exercises import check_dagger_mix
 
 PACKAGE = Path(vl.__file__).parent
 MODULES = sorted(p.stem for p in PACKAGE.glob("*.py") if p.stem not in ("__init__", "__main__"))

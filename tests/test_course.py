@@ -13,7 +13,8 @@ import pytest
 from vgai_lite.book import ROOT
 from vgai_lite.course import (grade_notebook, is_score_cell, make_student_copies, report_name, strip_solutions,
                               student_copy)
-from vgai_lite.exercises import EXERCISES, check_dagger_mix, exercises_of, score
+from vgai_lite.exercises import EXERCISES, exercises_of, score
+from vgai_lite.method_exercises import check_dagger_mix
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 GRADED = [p for p in NOTEBOOKS if exercises_of(p.name[:2])]

@@ -11,7 +11,10 @@ import torch
 import torch.nn.functional as nnf
 from torch import nn
 
-from vgai_lite.exercises import (check_aggregation_sequence, check_dagger_mix, check_residual_block)
+from vgai_lite.exercises import check_aggregation_sequence
+from vgai_lite.method_exercises import (check_bptt_loss, check_dagger_mix, check_dagger_round, check_residual_block,
+                                         check_sym_gso)
+from vgai_lite.aggregation import aggregation_sequence
 from vgai_lite.experiment_exercises import check_circular_conv, check_variance_at
 
 REPEATS = 5
@@ -264,3 +267,135 @@ def test_07_1_says_why_truncation_fails():
 def test_a_checks_own_shape_test_is_not_reported_as_the_students_error():
     msg = check_variance_at(lambda v, Ts, s: variance_at(v, Ts, s)[None]).message
     assert "expected one variance per flight of shape" in msg and "raised" not in msg
+
+
+# ---------------------------------------------------------------------------------------------
+# 02.2: the symmetric normalised GSO
+
+def sym_where(A):
+    d = A.sum(-1)
+    inv = torch.where(d > 0, d.rsqrt(), torch.zeros_like(d))
+    return inv[..., :, None] * A * inv[..., None, :]
+
+
+def sym_diag_loop_float32(A):
+    """Correct, another way: D^-1/2 as a matrix, per graph, in float32, isolated drones by nan_to_num."""
+    out = []
+    for a in A.float():
+        D = torch.diag(a.sum(-1).pow(-0.5))
+        out.append(torch.nan_to_num(D @ a @ D, posinf=0.0))
+    return torch.stack(out)
+
+
+@pytest.mark.parametrize("answer", [sym_where, sym_diag_loop_float32])
+def test_02_2_passes_correct_answers(answer):
+    assert all(passes(check_sym_gso, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda A: A.sum(-1).rsqrt()[..., :, None] * A * A.sum(-1).rsqrt()[..., None, :], "isolated drone gives NaN"),
+    (lambda A: A / A.sum(-1).clamp(min=1)[..., None], "row-normalised"),
+    (lambda A: sym_where(A + torch.eye(A.shape[-1], dtype=A.dtype)), "self-loops"),
+    (lambda A: A * A.sum(-1).clamp(min=1).rsqrt()[..., None, :], "one side only"),
+    (lambda A: A, "not normalised"),
+])
+def test_02_2_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_sym_gso, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 03.2: one DAgger round's data aggregation
+
+def round_right(data, learner, expert, mix, step, r, v, steps, label="expert", fly="mix", keep=True, late=False):
+    new = {"r": [], "v": [], "u": []}
+    for _ in range(steps):
+        u_star = expert(r, v)
+        u = {"mix": lambda: mix(learner(r, v), u_star), "expert": lambda: u_star}[fly]()
+        if not late:
+            new["r"].append(r), new["v"].append(v)
+        new["u"].append({"expert": u_star, "applied": u, "learner": learner(r, v)}[label])
+        r, v = step(r, v, u)
+        if late:
+            new["r"].append(r), new["v"].append(v)
+    return {k: (data[k] if keep else []) + new[k] for k in new}
+
+
+def round_extend_in_place(data, learner, expert, mix, step, r, v, steps):
+    """Correct, another way: extend the lists in place, labels computed after the coin."""
+    for _ in range(steps):
+        u = mix(learner(r, v), expert(r, v))
+        data["r"].append(r.clone()), data["v"].append(v.clone()), data["u"].append(expert(r, v))
+        r, v = step(r, v, u)
+    return data
+
+
+@pytest.mark.parametrize("answer", [round_right, round_extend_in_place])
+def test_03_2_passes_correct_answers(answer):
+    assert all(passes(check_dagger_round, answer))
+
+
+@pytest.mark.parametrize("kwargs,why", [
+    (dict(label="applied"), "labels are the applied actions"),
+    (dict(label="learner"), "labels are the learner's"),
+    (dict(fly="expert"), "the learner never flies"),
+    (dict(keep=False), "earlier rounds dropped"),
+    (dict(late=True), "state after the step recorded"),
+])
+def test_03_2_rejects_wrong_answers(kwargs, why):
+    assert not any(passes(check_dagger_round, lambda *a: round_right(*a, **kwargs))), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 06.3: the K-step BPTT loss
+
+def bptt_right(cnn, mlp, images, S, u_star, detach_past=False, loss="l1", reduce="mean", power=False):
+    M, K, N, D = images.shape
+    X = cnn(images.reshape(-1, D)).view(M, K, N, -1)
+    if detach_past:
+        X = torch.cat((X[:, :-1].detach(), X[:, -1:]), 1)
+    if power:
+        blocks = [torch.linalg.matrix_power(S[:, -1], k) @ X[:, -1 - k] for k in range(K)]
+        Z = torch.stack(blocks, 2)
+    else:
+        Z = aggregation_sequence(X, S, K)[:, -1]
+    u = mlp(Z)
+    if loss == "mse":
+        return nnf.mse_loss(u, u_star)
+    return (u - u_star).abs().mean() if reduce == "mean" else (u - u_star).abs().sum()
+
+
+def bptt_loop_float32(cnn, mlp, images, S, u_star):
+    """Correct, another way: the delayed aggregation by a loop over agents' messages, in float32."""
+    cnn32, mlp32 = cnn.float(), mlp.float()
+    try:
+        M, K, N, D = images.shape
+        X = cnn32(images.float())  # (M, K, N, F)
+        t = K - 1
+        blocks = []
+        for k in range(K):
+            z = X[:, t - k]
+            for s in range(t - k + 1, t + 1):
+                z = S[:, s].float() @ z
+            blocks.append(z)
+        return (mlp32(torch.stack(blocks, 2)) - u_star.float()).abs().mean()
+    finally:
+        cnn.double(), mlp.double()
+
+
+@pytest.mark.parametrize("answer", [bptt_right, bptt_loop_float32])
+def test_06_3_passes_correct_answers(answer):
+    assert all(passes(check_bptt_loss, answer))
+
+
+@pytest.mark.parametrize("kwargs,why", [
+    (dict(detach_past=True), "earlier steps detached: no BPTT"),
+    (dict(loss="mse"), "squared error"),
+    (dict(reduce="sum"), "sum instead of mean"),
+    (dict(power=True), "S(t)^k"),
+])
+def test_06_3_rejects_wrong_answers(kwargs, why):
+    assert not any(passes(check_bptt_loss, lambda *a: bptt_right(*a, **kwargs))), why
+
+
+def test_06_3_rejects_a_loss_without_gradient():
+    assert not any(passes(check_bptt_loss, lambda *a: bptt_right(*a).detach()))
