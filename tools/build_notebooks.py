@@ -11,6 +11,14 @@ that the committed notebook shows its outputs:
     python tools/build_notebooks.py 06 --markdown-only   # prose edits only: keep the executed outputs
 
 Edit the source, not the .ipynb, then rebuild: the two stay in step.
+
+Exercise cells carry nbgrader's cell metadata, written in the source's cell marker:
+
+    # %% [solution ex02-1]              the student's code cell (BEGIN/END SOLUTION inside)
+    # %% [check ex02-1]                 the autograded test cell of that exercise (1 point; it raises
+                                        when the check does not pass)
+    # %% [markdown answer ex05-2 2]     a written answer the instructor grades by hand (2 points; the
+                                        model answer is the cell's text, a student copy replaces it)
 """
 
 from __future__ import annotations
@@ -29,12 +37,30 @@ SOURCES = ROOT / "tools" / "notebooks"
 TARGET = ROOT / "notebooks"
 
 
+def nbgrader_metadata(marker: str) -> dict:
+    """nbgrader's metadata of a cell marker's role (``# %% [check ex02-1]`` -> a locked test cell
+    worth 1 point, grade_id "ex02-1-check"), or {} for a plain cell."""
+    words = marker.split("[", 1)[1].rstrip("]").split() if "[" in marker else []
+    words = [w for w in words if w != "markdown"]
+    if not words:
+        return {}
+    role, grade_id, *points = words
+    base = {"schema_version": 3, "grade_id": f"{grade_id}-{role}", "locked": False, "task": False}
+    if role == "solution":
+        return {**base, "solution": True, "grade": False}
+    if role == "check":
+        return {**base, "solution": False, "grade": True, "locked": True, "points": 1}
+    if role == "answer":
+        return {**base, "solution": True, "grade": True, "points": int(points[0]) if points else 1}
+    raise ValueError(f"unknown cell role {role!r} in {marker!r} (solution, check or answer)")
+
+
 def parse(text: str) -> nbformat.NotebookNode:
     """Percent-format Python -> a notebook with markdown and code cells."""
     nb = nbformat.v4.new_notebook()
     nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
     nb.metadata["language_info"] = {"name": "python"}
-    cells, kind, lines = [], None, []
+    cells, kind, lines, meta = [], None, [], {}
 
     def flush():
         if kind is None:
@@ -45,11 +71,16 @@ def parse(text: str) -> nbformat.NotebookNode:
             cells.append(nbformat.v4.new_markdown_cell(body))
         elif body.strip():
             cells.append(nbformat.v4.new_code_cell(body))
+        else:
+            return
+        if meta:
+            cells[-1].metadata["nbgrader"] = meta
 
     for line in text.splitlines():
         if line.startswith("# %%"):
             flush()
-            kind, lines = ("markdown" if "[markdown]" in line else "code"), []
+            kind, lines = ("markdown" if "[markdown" in line else "code"), []
+            meta = nbgrader_metadata(line)
         else:
             lines.append(line)
     flush()

@@ -12,6 +12,7 @@
   site       the book as a static website (Sphinx + MyST-NB, from the executed notebooks), site/
   student-copies  write the notebooks with every exercise's solution replaced by a stub
   grade        execute a student's notebook in quick mode and score its exercises (JSON)
+  nbgrader-course  lay the graded notebooks out as an nbgrader course (needs requirements-grading.txt)
 """
 
 from __future__ import annotations
@@ -201,6 +202,15 @@ def cmd_student_copies(args, extra):
         print("wrote", path)
 
 
+def cmd_nbgrader_course(args, extra):
+    from .course import nbgrader_course
+
+    for path in nbgrader_course(args.out, args.source):
+        print("wrote", path)
+    print(f"then, in {args.out}: nbgrader generate_assignment NN (student version in release/NN/), and "
+          "VGAI_LITE_QUICK=1 nbgrader autograde NN --create (hand-ins in submitted/STUDENT/NN/)")
+
+
 def cmd_grade(args, extra):
     from .course import grade_notebook
 
@@ -342,6 +352,9 @@ def main(argv=None):
     p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
     p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
     p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")
+    p = sub.add_parser("nbgrader-course", help="the graded notebooks as an nbgrader course: source/NN/, config")
+    p.add_argument("--out", default="course", help="the course folder (default ./course)")
+    p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")
     p = sub.add_parser("grade", help="execute notebooks (quick mode) and score their exercises")
     p.add_argument("notebooks", nargs="+", help="notebook files named NN_*.ipynb")
     p.add_argument("--out", default=None, help="folder (or .json file) for the JSON report(s)")
@@ -356,7 +369,7 @@ def main(argv=None):
      "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn,
      "train-vgai": cmd_train_vgai, "student-copies": cmd_student_copies,
      "reproduce": cmd_reproduce, "site": cmd_site,
-     "grade": cmd_grade}[args.command](args, extra)
+     "grade": cmd_grade, "nbgrader-course": cmd_nbgrader_course}[args.command](args, extra)
 
 
 if __name__ == "__main__":

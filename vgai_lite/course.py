@@ -11,7 +11,13 @@ solution sits between two marker lines inside a code cell::
         ### END SOLUTION
 
 ``make_student_copies`` replaces each such block by its ``# HINT:`` lines (if any) and a line that
-raises ``NotImplementedError`` naming the exercise, and clears every output. ``grade_notebook``
+raises ``NotImplementedError`` naming the exercise, replaces each written answer (a markdown cell
+the instructor grades by hand) by "YOUR ANSWER HERE", and clears every output.
+
+The exercise cells carry nbgrader's cell metadata (``tools/build_notebooks.py``), so nbgrader works
+on the book as it is: ``nbgrader_course`` lays the notebooks out as an nbgrader course (one
+assignment per notebook), where ``nbgrader generate_assignment`` makes the student version and
+``nbgrader autograde`` scores a hand-in with the same points as ``grade_notebook``. ``grade_notebook``
 executes a notebook in quick mode, collects what each exercise check (``vgai_lite.exercises``)
 reported, and returns (and writes) a score per exercise as JSON.
 
@@ -86,6 +92,16 @@ def strip_solutions(source: str, exercise: str = "", where: str = "cell") -> tup
     return "\n".join(out), blocks
 
 
+ANSWER_STUB = "YOUR ANSWER HERE"
+"""What a student copy shows in place of a written answer (nbgrader's own stub)."""
+
+
+def is_written_answer(cell) -> bool:
+    """A markdown cell the instructor grades by hand (nbgrader: solution and grade, markdown)."""
+    meta = cell.get("metadata", {}).get("nbgrader", {})
+    return cell.cell_type == "markdown" and bool(meta.get("solution")) and bool(meta.get("grade"))
+
+
 def student_copy(nb: nbformat.NotebookNode, name: str = "notebook") -> tuple[nbformat.NotebookNode, int]:
     """A copy of ``nb`` with every solution stubbed and every output cleared; (copy, blocks stubbed).
 
@@ -93,6 +109,9 @@ def student_copy(nb: nbformat.NotebookNode, name: str = "notebook") -> tuple[nbf
     nb = nbformat.from_dict(json.loads(json.dumps(nb)))  # deep copy
     exercise, total = "", 0
     for i, cell in enumerate(nb.cells):
+        if is_written_answer(cell):
+            cell.source = ANSWER_STUB
+            continue
         if cell.cell_type == "markdown":
             found = _EXERCISE_ID.findall(cell.source)
             exercise = found[-1] if found else exercise
@@ -126,6 +145,37 @@ def make_student_copies(out: Union[str, Path], source: Optional[Union[str, Path]
         target = out / path.name
         nbformat.write(nb, target)
         written.append(target)
+    return written
+
+
+NBGRADER_CONFIG = """# nbgrader configuration of the book's course (written by python -m vgai_lite nbgrader-course)
+c = get_config()  # noqa: F821
+c.CourseDirectory.course_id = "vgai-lite"
+c.CourseDirectory.root = {root!r}
+c.Execute.timeout = 1200            # seconds per cell: a hand-in runs the notebook's own cells
+"""
+
+
+def nbgrader_course(out: Union[str, Path], source: Optional[Union[str, Path]] = None) -> list[Path]:
+    """Lay the book's graded notebooks out as an nbgrader course in ``out``: ``source/NN/NN_*.ipynb``
+    (assignment "NN", the solution notebook as it is) and ``nbgrader_config.py``. Then, in ``out``:
+    ``nbgrader generate_assignment NN`` writes the student version to ``release/NN/``, and
+    ``nbgrader autograde NN`` scores hand-ins in ``submitted/STUDENT/NN/`` (set ``VGAI_LITE_QUICK=1``
+    in its environment to run the book's quick mode, as ``grade`` does). Returns the notebooks written."""
+    source = Path(source) if source is not None else ROOT / "notebooks"
+    out = Path(out)
+    written = []
+    for path in sorted(source.glob("[0-9][0-9]_*.ipynb")):
+        number = notebook_number(path)
+        if not exercises_of(number):
+            continue
+        target = out / "source" / number / path.name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(path.read_bytes())
+        written.append(target)
+    if not written:
+        raise FileNotFoundError(f"no graded notebooks (NN_*.ipynb with exercises) in {source}")
+    (out / "nbgrader_config.py").write_text(NBGRADER_CONFIG.format(root=str(out.resolve())))
     return written
 
 

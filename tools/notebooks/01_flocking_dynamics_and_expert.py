@@ -173,9 +173,9 @@ plt.show()
 # **Episode length.** The paper does not give $T$. We use $T = 200$ steps (2 s): by then the
 # expert has flocked and its action is zero, so a longer episode adds only the learner's residual
 # disagreement.
-
-# %%
-print(inspect.getsource(flocking_cost).split('"""')[-1])
+#
+# You will write eq. 1 yourself in exercise 01.2, at the end of this notebook; the book uses
+# `vgai_lite.flocking_cost`.
 
 # %% [markdown]
 # ## 5. The collision potential (eq. 3) and the expert (eq. 2)
@@ -222,7 +222,6 @@ plt.show()
 from vgai_lite import controllers
 
 print(inspect.getsource(controllers.expert_control).split('"""')[-1])
-print(inspect.getsource(controllers._repulsion).split('"""')[-1])
 
 # %% [markdown]
 # ## 6. The local heuristic
@@ -374,9 +373,7 @@ display(Markdown("| rho [m] | expert cost | Local cost | Local / Centralized | L
 # the potential is constant. The check compares your function with the library's on fresh random
 # offsets.
 
-# %%
-from vgai_lite.exercises import check_flocking_cost, check_potential_gradient
-
+# %% [solution ex01-1]
 
 def my_potential_gradient(r_ij, rho):
     ### BEGIN SOLUTION
@@ -386,14 +383,16 @@ def my_potential_gradient(r_ij, rho):
     return torch.where(d2 <= rho ** 2, grad, torch.zeros_like(grad))
     ### END SOLUTION
 
+# %% [check ex01-1]
+from vgai_lite.exercises import check_potential_gradient
 
-check_potential_gradient(my_potential_gradient);
+assert check_potential_gradient(my_potential_gradient)
 
 # %% [markdown]
 # **Exercise 01.2: the flocking cost.** Write eq. 1 for a velocity trajectory `v` of shape
 # `(T, B, N, 2)`, returning one cost per swarm, shape `(B,)`.
 
-# %%
+# %% [solution ex01-2]
 def my_flocking_cost(v):
     ### BEGIN SOLUTION
     # HINT: subtract the swarm's mean velocity (mean over agents, dim=2), square, sum x and y, average over agents, sum over time
@@ -401,8 +400,10 @@ def my_flocking_cost(v):
     return ((v - vbar) ** 2).sum(dim=-1).mean(dim=2).sum(dim=0)
     ### END SOLUTION
 
+# %% [check ex01-2]
+from vgai_lite.exercises import check_flocking_cost
 
-check_flocking_cost(my_flocking_cost);
+assert check_flocking_cost(my_flocking_cost)
 
 # %%
 prose("""## What we have, and what comes next

@@ -212,10 +212,7 @@ display(Markdown("| F | exchanges K-1 | bytes per agent per step | kB/s at 100 H
 # times $0, \dots, T-1$ (nothing before $0$), return $\mathbf Z(T-1)$ of shape `(N, K, F)`, block
 # $k$ being $\mathbf S(t)\mathbf S(t-1)\cdots\mathbf S(t-k+1)\mathbf X(t-k)$ (zero if $t - k < 0$).
 
-# %%
-from vgai_lite.exercises import check_aggregation_sequence
-
-
+# %% [solution ex02-1]
 def my_aggregation_sequence(X, S, K):
     ### BEGIN SOLUTION
     # HINT: block k starts from X[t - k] and is multiplied by S[t-k+1], ..., S[t] in that order (zeros if t - k < 0); torch.stack(blocks, dim=1)
@@ -233,8 +230,34 @@ def my_aggregation_sequence(X, S, K):
     return torch.stack(blocks, dim=1)
     ### END SOLUTION
 
+# %% [check ex02-1]
+from vgai_lite.exercises import check_aggregation_sequence
 
-check_aggregation_sequence(my_aggregation_sequence);
+assert check_aggregation_sequence(my_aggregation_sequence)
+
+# %% [markdown]
+# ## 7. Exercise 02.2: the symmetric normalised GSO
+#
+# Write the book's default graph shift operator for a batch of adjacency matrices `A` of shape
+# `(B, N, N)` (0/1, symmetric, no self-loops): $\mathbf S = \mathbf D^{-1/2}\mathbf A\mathbf D^{-1/2}$
+# with $\mathbf D$ the diagonal matrix of the degrees $d_i = \sum_j A_{ij}$, so that
+# $S_{ij} = A_{ij} / \sqrt{d_i d_j}$. A drone with no neighbour ($d_i = 0$) hears nothing: its row and
+# column of $\mathbf S$ are zero, and nothing in $\mathbf S$ may be NaN or infinite. The check feeds
+# random graphs of mixed density, each with an isolated drone.
+
+# %% [solution ex02-2]
+def my_sym_gso(A):
+    ### BEGIN SOLUTION
+    # HINT: degrees d = A.sum(-1); 1/sqrt(d) where d > 0 and 0 where d = 0; scale the rows and the columns
+    d = A.sum(dim=-1)
+    inv_sqrt = torch.where(d > 0, d.clamp(min=1).rsqrt(), torch.zeros_like(d))
+    return inv_sqrt[..., :, None] * A * inv_sqrt[..., None, :]
+    ### END SOLUTION
+
+# %% [check ex02-2]
+from vgai_lite.method_exercises import check_sym_gso
+
+assert check_sym_gso(my_sym_gso)
 
 # %% [markdown]
 # ## Key takeaways

@@ -122,14 +122,9 @@ prose("A uniform sample of agent-steps would spend most updates on states where 
 # DAgger (Ross et al. 2011) collects data in rounds: during collection each swarm follows the
 # *learner's* action instead of the expert's with probability 0.33 at every step (the paper's
 # value), every visited state is labelled with the expert's action, and the datasets of all rounds
-# are aggregated. Round 0 follows the expert only (the learner knows nothing yet). The code, from
-# `vgai_lite/imitation.py` (`dagger_mix`, the rule exercise 06.1 asks for, and `fly_dagger`):
-#
-# ```python
-# follow = torch.rand(B, generator=generator) < p                 # one coin per swarm and step
-# u = torch.where(follow[:, None, None], u_learner, u_expert)     # ... the action applied
-# record(t, r, v, u_star, Z)                                      # ... the expert's label stored
-# ```
+# are aggregated. Round 0 follows the expert only (the learner knows nothing yet). One round's data
+# collection is exercise 03.2 at the end of this notebook; the coin that decides who flies is
+# exercise 06.1.
 #
 # Everything else the paper leaves open is in one object, with our choices (a few minutes of CPU):
 
@@ -338,10 +333,7 @@ display(Markdown(f"| alignment gain | repulsion | relative cost | median closest
 # the order `[sum (v_i - v_j), sum r_ij/|r_ij|^4, sum r_ij/|r_ij|^2]` (x and y of each), summing
 # over the neighbours $j \ne i$ with $\|\mathbf r_{ij}\| \le R$.
 
-# %%
-from vgai_lite.exercises import check_local_features
-
-
+# %% [solution ex03-1]
 def my_local_features(r, v, R):
     ### BEGIN SOLUTION
     # HINT: r_ij = r[:, None] - r[None, :] gives all offsets at once; mask the neighbours (d^2 <= R^2, not i itself) before dividing
@@ -355,8 +347,38 @@ def my_local_features(r, v, R):
                       (w * r_ij / d2[..., None]).sum(1)), dim=-1)
     ### END SOLUTION
 
+# %% [check ex03-1]
+from vgai_lite.exercises import check_local_features
 
-check_local_features(my_local_features);
+assert check_local_features(my_local_features)
+
+# %% [markdown]
+# ## 12. Exercise 03.2: one DAgger round's data
+#
+# Write the data collection of one DAgger round (section 4). `data` holds the earlier rounds' lists
+# `data["r"]`, `data["v"]`, `data["u"]`: one `(B, N, 2)` tensor per visited step (positions,
+# velocities, and the label). From the swarms' state `(r0, v0)` fly `steps` steps; at each step
+# record the state, label it with the **expert's** action `u_star = expert(r, v)`, and move on with the
+# action DAgger applies, `mix(learner(r, v), u_star)` (the learner's with probability $p$, else the
+# expert's), through `step(r, v, u)`, which returns the next `(r, v)`. Return the data of every round
+# so far. The check flies toy policies and dynamics and compares the states and labels you collect.
+
+# %% [solution ex03-2]
+def my_dagger_round(data, learner, expert, mix, step, r0, v0, steps):
+    ### BEGIN SOLUTION
+    # HINT: record (r, v) before stepping; the label is expert(r, v) whoever flies; append to the old lists, do not start new ones
+    r, v = r0, v0
+    for _ in range(steps):
+        u_star = expert(r, v)
+        data["r"].append(r), data["v"].append(v), data["u"].append(u_star)
+        r, v = step(r, v, mix(learner(r, v), u_star))
+    return data
+    ### END SOLUTION
+
+# %% [check ex03-2]
+from vgai_lite.method_exercises import check_dagger_round
+
+assert check_dagger_round(my_dagger_round)
 
 # %% [markdown]
 # ## Key takeaways

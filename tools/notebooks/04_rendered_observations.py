@@ -309,10 +309,7 @@ print(f"apparent height = 2 × {rcfg.focal_vertical:.1f} × {rcfg.body_height / 
 # apparent height in rows (the centre ray meets its near side at `d - rcfg.body_radius`). Use
 # `rcfg.view_width`, `rcfg.focal`, `rcfg.focal_vertical` and `rcfg.body_height`.
 
-# %%
-from vgai_lite.exercises import check_pinhole
-
-
+# %% [solution ex04-1]
 def my_pinhole(theta, d, rcfg):
     ### BEGIN SOLUTION
     # HINT: the four cameras each cover 90 degrees; find which camera sees theta, the angle phi from its axis, then u = camera offset + view_width/2 + focal * tan(phi)
@@ -324,8 +321,10 @@ def my_pinhole(theta, d, rcfg):
     return u, height
     ### END SOLUTION
 
+# %% [check ex04-1]
+from vgai_lite.exercises import check_pinhole
 
-check_pinhole(my_pinhole);
+assert check_pinhole(my_pinhole)
 
 # %% [markdown]
 # ## Key takeaways

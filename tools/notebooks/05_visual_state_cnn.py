@@ -238,10 +238,9 @@ print("share of the saliency on the two difference channels:", f"{(sal[2:].sum()
 # a skip connection (a 1×1 convolution when `c_in != c_out`), a ReLU, then average pooling of `pool`
 # rows into one, leaving the columns untouched. Input `(M, c_in, H, W)`, output `(M, c_out, H / pool, W)`.
 
-# %%
+# %% [solution ex05-1]
 from torch import nn
 
-from vgai_lite.exercises import check_residual_block
 
 
 class MyResidualBlock(nn.Module):
@@ -262,8 +261,10 @@ class MyResidualBlock(nn.Module):
         return self.pool(torch.relu(y + self.skip(x)))
         ### END SOLUTION
 
+# %% [check ex05-1]
+from vgai_lite.method_exercises import check_residual_block
 
-check_residual_block(MyResidualBlock);
+assert check_residual_block(MyResidualBlock)
 
 # %% [markdown]
 # ## 6. Exercise 05.2, an open-ended experiment: a panorama that wraps around
@@ -273,10 +274,9 @@ check_residual_block(MyResidualBlock);
 # drone's left camera. Write `MyCircularConv(c_in, c_out)`, a 1×3 convolution along the columns whose
 # padding wraps around; the check tests that rolling the panorama rolls its output exactly.
 
-# %%
+# %% [solution ex05-2]
 from torch import nn
 
-from vgai_lite.experiment_exercises import check_circular_conv
 
 
 class MyCircularConv(nn.Module):
@@ -293,13 +293,15 @@ class MyCircularConv(nn.Module):
         return self.conv(x)
         ### END SOLUTION
 
+# %% [check ex05-2]
+from vgai_lite.experiment_exercises import check_circular_conv
 
-check_circular_conv(MyCircularConv);
+assert check_circular_conv(MyCircularConv)
 
 # %% [markdown]
 # **The experiment.** Turning the world by 180° rolls every panorama by half its width and negates
 # all six local features (they are sums of vectors). A CNN that respects the panorama's circle would
-# see that exactly: $\mathrm{est}(	ext{roll}(\mathbf H)) = -\mathrm{est}(\mathbf H)$. Below, two
+# see that exactly: $\mathrm{est}(\text{roll}(\mathbf H)) = -\mathrm{est}(\mathbf H)$. Below, two
 # estimators are trained the same short way (a few hundred steps, from the same seed), one with the
 # book's zero padding and one whose column convolutions are your `MyCircularConv`, and each is scored
 # on held-out expert flights: its correlation with the exact features and how far it is from that
@@ -349,7 +351,21 @@ else:
                      "|---|" + "---|" * 8 + "\n" + "\n".join(rows)))
 
 # %% [markdown]
-# ## Key takeaways
+# **Your conclusion (graded by the instructor).** Should the book's CNN switch to circular padding?
+# Answer in a few sentences in the cell below, from your table and any run you add: what changed in
+# the correlations and in the distance from the 180° symmetry, whether that difference is larger
+# than what two trainings of the same estimator with different seeds would give, and what you would
+# need to see before switching.
+
+# %% [markdown answer ex05-2 2]
+# *Model answer.* Compare the two rows column by column. Circular padding removes the seam, so the
+# estimator's distance from the 180° symmetry should fall, while the correlations with the exact
+# features should stay about where they were (the seam touches only the columns next to it). One
+# short training per variant does not separate a small difference from training noise: the same
+# estimator trained with another seed moves these numbers too, so a fair comparison repeats each
+# variant over a few seeds (and at the full length of stage 1) and switches only if circular
+# padding is better on average by more than the spread between seeds. It costs nothing at run time
+# (the same convolutions, padded differently), so a switch needs only that evidence.
 #
 # * The CNN pools rows only, so every column's bearing survives to its last layers.
 # * Regressing the DAGNN's exact features (visual state estimation) shows what the CNN can see: relative positions well, relative velocities only from two frames, and poorly when they are small.

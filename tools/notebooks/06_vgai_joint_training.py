@@ -65,16 +65,8 @@ bptt(K=4)
 plt.show()
 
 # %% [markdown]
-# From `bptt_loss` in `vgai_lite/vgai_training.py` (`M` windows; `tau_c`, `ee`: the window's steps and
-# episodes; `stored_images` is the very pipeline the controller flies with, `vision.camera_input`):
-#
-# ```python
-# X = model.features(stored_images(vision, cfg, r, v, ee, tau_c)).view(M, K, N, F) * valid  # none before t = 0
-# S = gso(adjacency(r[tau_c, ee], R), gso_kind).view(M, K, N, N) * valid
-# Z = aggregation_sequence(X, S, K)[:, -1]             # Z(t) at the window's last step
-# loss = l1_loss(model.mlp(Z), u_star[t_end, e])
-# loss.backward()                                      # K-step BPTT
-# ```
+# The library's version is `bptt_loss` in `vgai_lite/vgai_training.py`; you will write the loss
+# yourself in exercise 06.3, at the end of this notebook.
 #
 # ## 2. Training in three stages
 #
@@ -429,10 +421,7 @@ prose("At 5 s, against the modular pilot: {per_seed}. {common}. The end-to-end M
 # Write the rule: given `u_learner` and `u_expert` of shape `(B, N, 2)`, return the actions applied,
 # drawing one coin per swarm from `generator`.
 
-# %%
-from vgai_lite.exercises import check_dagger_mix
-
-
+# %% [solution ex06-1]
 def my_dagger_mix(u_learner, u_expert, p, generator):
     ### BEGIN SOLUTION
     # HINT: one torch.rand(B, generator=generator) < p per swarm, then torch.where with the coin broadcast to (B, N, 2)
@@ -440,21 +429,54 @@ def my_dagger_mix(u_learner, u_expert, p, generator):
     return torch.where(follow[:, None, None], u_learner, u_expert)
     ### END SOLUTION
 
+# %% [check ex06-1]
+from vgai_lite.method_exercises import check_dagger_mix
 
-check_dagger_mix(my_dagger_mix);
+assert check_dagger_mix(my_dagger_mix)
 
 # %% [markdown]
-# ## 8. Exercise 06.2, an open-ended experiment: make any estimator odd
+# ## 8. Exercise 06.3: the K-step BPTT loss
+#
+# Write the loss of one joint step (section 1, the paper's figure 3) for `M` windows of `K` steps:
+# `images` of shape `(M, K, N, D)` holds every agent's input at the window's `K` steps, oldest first
+# (here any `D` numbers stand for an image), `cnn` maps `(P, D)` to `(P, F)`, `S` of shape
+# `(M, K, N, N)` holds the GSOs at those steps and `u_star` of shape `(M, N, 2)` the expert's action at
+# each window's last step. Run the CNN on all `K` steps' inputs, build $\mathbf Z(t)$ at the last step
+# (eq. 6: block $k$ is $\mathbf S(t)\cdots\mathbf S(t-k+1)\mathbf X(t-k)$), act once with
+# `mlp` (it maps `(M, N, K, F)` to `(M, N, 2)`), and return the L1 loss of eq. 10 (the mean over
+# windows, agents and both components). Calling `backward()` on it must reach the CNN at every step
+# of the window: that is the "K-step" in K-step BPTT.
+
+# %% [solution ex06-3]
+def my_bptt_loss(cnn, mlp, images, S, u_star):
+    ### BEGIN SOLUTION
+    # HINT: X = cnn(images.reshape(-1, D)).view(M, K, N, F); block k: X[:, K-1-k] multiplied by S[:, K-k], ..., S[:, K-1]; torch.nn.functional.l1_loss
+    M, K, N, D = images.shape
+    X = cnn(images.reshape(-1, D)).view(M, K, N, -1)
+    blocks = []
+    for k in range(K):
+        z = X[:, K - 1 - k]
+        for s in range(K - k, K):  # S(t-k+1) first, S(t) last
+            z = S[:, s] @ z
+        blocks.append(z)
+    Z = torch.stack(blocks, dim=2)  # (M, N, K, F)
+    return torch.nn.functional.l1_loss(mlp(Z), u_star)
+    ### END SOLUTION
+
+# %% [check ex06-3]
+from vgai_lite.method_exercises import check_bptt_loss
+
+assert check_bptt_loss(my_bptt_loss)
+
+# %% [markdown]
+# ## 9. Exercise 06.2, an open-ended experiment: make any estimator odd
 #
 # Section 6's cure made the CNN's velocity features *odd* in the motion channels $D$: the odd part of
 # any function $f$ of the images is $\frac12\left(f([\mathbf I, D]) - f([\mathbf I, -D])\right)$, exactly 0
 # when nothing moves. Write `my_odd_part(f, images)` for images `(M, C, H, W)` whose second half of
 # channels is $D$.
 
-# %%
-from vgai_lite.experiment_exercises import check_odd_part
-
-
+# %% [solution ex06-2]
 def my_odd_part(f, images):
     ### BEGIN SOLUTION
     # HINT: negate the second half of the channels, evaluate f on both, take half the difference
@@ -463,8 +485,10 @@ def my_odd_part(f, images):
     return (f(images) - f(mirrored)) / 2
     ### END SOLUTION
 
+# %% [check ex06-2]
+from vgai_lite.experiment_exercises import check_odd_part
 
-check_odd_part(my_odd_part);
+assert check_odd_part(my_odd_part)
 
 # %% [markdown]
 # **The experiment.** Apply your odd part, without any retraining, to notebook 05's *plain* two-frame
@@ -503,6 +527,24 @@ else:
     display(Markdown("| velocity estimates | mean size where aligned (truth 0) | correlation at step 20, x | y |\n"
                      "|---|---|---|---|\n" + "\n".join(rows)))
 
+# %% [markdown]
+# **Your conclusion (graded by the instructor).** Does the odd part keep what the plain CNN knew
+# about relative velocities, and does it remove the bias where the swarm has aligned? Would the plain
+# estimator, made odd after training, do as well as an estimator trained odd? Answer in a few
+# sentences in the cell below, from your table.
+
+# %% [markdown answer ex06-2 2]
+# *Model answer.* Where the swarm has aligned the exact velocity features are 0; the plain
+# estimator reads a bias there that depends on where the neighbours stand, and its odd part removes
+# everything that does not change sign with the motion channels, so its estimates there shrink
+# towards 0 (exactly 0 only where the motion channels are exactly 0). Early in the flight, where the
+# drones disagree, the odd part keeps the part of the estimate that is linear in the motion, so
+# its correlation with the exact features stays close to the plain estimator's; whatever the plain
+# CNN had learned from the even part (e.g. guessing velocities from the formation) is lost. Made
+# odd after training, the estimator was never taught to put its velocity knowledge into the odd
+# part, so it is a lower bound: an estimator trained odd learns with that constraint and does at
+# least as well, which is why the book trains it odd (section 6) rather than taking the odd part
+# afterwards.
 # %% [markdown]
 # ## Key takeaways
 #
