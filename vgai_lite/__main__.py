@@ -92,13 +92,19 @@ def cmd_evaluate(args, extra):
         controller.cfg = cfg
     else:
         raise SystemExit(f"--controller must be 'local', 'expert' or a checkpoint file (.pt), got {args.controller!r}")
-    res = relative_cost(controller, cfg, episodes=args.episodes, seed=args.seed, device=args.device)
+    from .provenance import Provenance
+
+    with Provenance(" ".join(["python -m vgai_lite"] + sys.argv[1:])) as prov:
+        res = relative_cost(controller, cfg, episodes=args.episodes, seed=args.seed, device=args.device)
     print(res)
     if args.consensus:
         flock = consensus(controller, cfg, episodes=args.consensus, seed=args.seed)
         print(flock)
     if args.json:
-        out = {"config": cfg.to_dict(), **res.summary(), **({"consensus": flock.summary()} if args.consensus else {})}
+        out = {"config": cfg.to_dict(), **res.summary(), "pinned": res.pinned(),
+               **({"consensus": flock.summary()} if args.consensus else {}),
+               "provenance": prov.record(checkpoint=args.controller if args.controller.endswith(".pt") else None,
+                                         seed=args.seed, episodes=args.episodes)}
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
         print("wrote", args.json)

@@ -20,6 +20,8 @@ from .controllers import ExpertController
 from .flocking import flocking_cost, rollout, sample_initial_state
 
 CLOSE_CALLS = (0.05, 0.1)  # m: a pair closer than this counts as a close call
+PINNED_EPISODES = 3
+"""Episodes a record keeps one by one (``RelativeCost.pinned``): the first ones of its seed."""
 FLOCK_TIMES = (2.0, 5.0)
 """Seconds at which ``relative_cost`` reads the velocity variance: 2 s (the end of the paper-length
 episode, T = 200 steps) and 5 s (the same flights flown on: a longer horizon exposes disagreements
@@ -100,6 +102,13 @@ class RelativeCost:
             out["share_connected_at_end"] = f["share_connected_at_end"]
             out["flocking_horizon_s"] = max(self.flocking.times)
         return out
+
+    def pinned(self, k: int = PINNED_EPISODES) -> dict:
+        """The per-episode relative costs of the first ``k`` episodes: what a record keeps so that a
+        test can fly those episodes again from its checkpoint and check the record still holds
+        (``tests/test_records.py``)."""
+        ratio = (self.cost / self.expert_cost)[:k]
+        return {"episodes": int(len(ratio)), "relative_cost": [round(float(x), 6) for x in ratio]}
 
     def flocked(self) -> str:
         """One line: velocity variance at each time read, and the share of connected swarms."""

@@ -80,11 +80,16 @@ ESTIMATOR_RUNS: dict[str, VisionConfig] = {
 """The state estimators the book ships in data/vgai/, by name."""
 
 
-def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Optional[dict] = None) -> Path:
-    """Save a RelativeCost's summary with its configuration as JSON (what the notebooks display)."""
+def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Optional[dict] = None,
+                     provenance: Optional[dict] = None) -> Path:
+    """Save a RelativeCost's summary with its configuration as JSON (what the notebooks display),
+    its first episodes one by one (``RelativeCost.pinned``) and, when given, its provenance
+    (``vgai_lite.provenance``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    out = {"config": dataclasses.asdict(cfg), **result.summary(), **(extra or {})}
+    out = {"config": dataclasses.asdict(cfg), **result.summary(), "pinned": result.pinned(), **(extra or {})}
+    if provenance is not None:
+        out["provenance"] = provenance
     path.write_text(json.dumps(out, indent=2) + "\n")
     return path
 

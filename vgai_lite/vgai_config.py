@@ -18,7 +18,7 @@ from .vision import VisionConfig
 
 
 OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight", "flight_steps", "mlp_on_exact",
-                   "anchor_weight")
+                   "anchor_weight", "joint_early_share")
 """Fields added in the consensus round (notebook 06, section 6); a stored config without them had 0."""
 
 PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0}
@@ -64,6 +64,8 @@ class VGAITrainConfig:
             and 2 read the first cfg.T steps of each; stage 3 draws its windows over the whole
             flight, so that the drifting a learner does after 2 s is labelled with the expert's
             braking (issue 24, hypothesis 1).
+        joint_early_share: stage 3's own early_share (0: early_share's), for its windows only, so that
+            stages 1 and 2 (and the cached stage 1) stay as they were (hypothesis 1).
         mlp_on_exact: stage 2 fits the MLP on the CNN's features corrected through the aux head
             (``exact_through_aux``) so that they read as the exact local features, as the modular
             vision pilot's MLP learned its response on exact features (hypothesis 2).
@@ -99,6 +101,7 @@ class VGAITrainConfig:
     motion_features: Optional[int] = None
     aux_weight: float = 5.0
     flight_steps: int = 0
+    joint_early_share: float = 0.0
     mlp_on_exact: bool = False
     anchor_weight: float = 0.0
 
@@ -139,9 +142,10 @@ class VGAITrainConfig:
                          AggregationMLP(self.K, self.F, self.hidden))
 
 
-def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> torch.Tensor:
-    """n time steps in [0, T): in the first ``early_steps`` with probability ``early_share``, else uniform."""
-    early = torch.rand(n, generator=g) < tcfg.early_share
+def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator, share: float = 0.0) -> torch.Tensor:
+    """n time steps in [0, T): in the first ``early_steps`` with probability ``share`` (0: the
+    config's ``early_share``), else uniform."""
+    early = torch.rand(n, generator=g) < (share or tcfg.early_share)
     t_early = torch.randint(0, min(tcfg.early_steps, T), (n,), generator=g)
     t_any = torch.randint(0, T, (n,), generator=g)
     return torch.where(early, t_early, t_any)

@@ -142,7 +142,7 @@ def bptt_loss(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torc
     T, E = r.shape[:2]
     K, M = tcfg.K, tcfg.windows
     e = torch.randint(0, E, (M,), generator=gen)
-    t_end = sample_times(M, T, tcfg, gen)
+    t_end = sample_times(M, T, tcfg, gen, tcfg.joint_early_share)
     tau = t_end[:, None] - (K - 1) + torch.arange(K)  # (M, K) times of the window
     valid = (tau >= 0).float()[:, :, None, None]
     tau_c, ee = tau.clamp(min=0).flatten(), e[:, None].expand_as(tau).flatten()

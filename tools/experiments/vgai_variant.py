@@ -48,6 +48,7 @@ def main(argv=None) -> int:
     p.add_argument("--flight-steps", type=int, default=None, help="steps of every stored flight (hypothesis 1)")
     p.add_argument("--mlp-on-exact", action="store_true", default=None,
                    help="stage 2 on the CNN's features read as the exact ones (hypothesis 2)")
+    p.add_argument("--joint-early-share", type=float, default=None, help="stage 3's windows' early share (hypothesis 1)")
     p.add_argument("--anchor-weight", type=float, default=None, help="stage 3 anchor loss (hypothesis 2)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
@@ -62,7 +63,7 @@ def main(argv=None) -> int:
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
                                  ("flight_steps", args.flight_steps), ("mlp_on_exact", args.mlp_on_exact),
-                                 ("anchor_weight", args.anchor_weight)) if v is not None}
+                                 ("anchor_weight", args.anchor_weight), ("joint_early_share", args.joint_early_share)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
     folder = DATA_DIR / "experiments"
     command = " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:]))
@@ -81,6 +82,7 @@ def main(argv=None) -> int:
            "train_seconds": round(hist["seconds"], 1), "stage1_cached": hist.get("stage1_cached"),
            "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
            "evaluation_seconds": round(eval_prov.seconds, 1), "validation": hist["rounds"], **res.summary(),
+           "pinned": res.pinned(),
            "provenance": {"training": None if args.evaluate else train_prov.record(),
                           "evaluation": eval_prov.record(checkpoint=ckpt, seed=VALIDATION_SEED,
                                                          episodes=args.episodes)}}

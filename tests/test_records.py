@@ -1,0 +1,86 @@
+"""Records that say where they came from, checked against their checkpoints (issue 24).
+
+Every record with a ``provenance`` names its command, commit, versions, threads, load average and the
+sha256 of the checkpoint it flew; with ``pinned`` it keeps its first episodes' relative costs one by
+one. This test checks the checkpoint is still the one the record flew, and flies the pinned episodes
+again from it: a record that no longer matches its checkpoint (or a library change that moves the
+numbers) fails here.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import torch
+
+from vgai_lite import ExpertController, FlockConfig, load_controller, rollout, sample_initial_state
+from vgai_lite.book import DATA_DIR, ROOT
+from vgai_lite.flocking import flocking_cost
+from vgai_lite.provenance import Provenance, sha256
+
+PROVENANCE_FIELDS = {"command", "git_commit", "library_modified_since_commit", "python", "torch", "torch_threads",
+                     "load_average_mean", "load_average_max", "wall_seconds"}
+
+
+def _records():
+    out = []
+    for path in sorted(DATA_DIR.rglob("*.json")):
+        try:
+            rec = json.loads(path.read_text())
+        except json.JSONDecodeError:
+            continue
+        if isinstance(rec, dict) and "provenance" in rec:
+            out.append((path, rec))
+    return out
+
+
+def _evaluation(rec: dict) -> dict:
+    prov = rec["provenance"]
+    return prov.get("evaluation", prov) if isinstance(prov, dict) else prov
+
+
+RECORDS = _records()
+
+
+def test_records_with_provenance_exist():
+    assert RECORDS, "no record in data/ carries a provenance"
+
+
+@pytest.mark.parametrize("path,rec", RECORDS, ids=[str(p.relative_to(DATA_DIR)) for p, _ in RECORDS])
+def test_a_records_provenance_is_complete_and_names_its_checkpoint(path, rec):
+    prov = _evaluation(rec)
+    assert PROVENANCE_FIELDS <= set(prov), f"missing {PROVENANCE_FIELDS - set(prov)}"
+    assert {"checkpoint", "checkpoint_sha256", "episodes_seed", "episodes"} <= set(prov)
+    ckpt = ROOT / prov["checkpoint"]
+    assert ckpt.is_file(), f"{path.name} flew {prov['checkpoint']}, which is not in the repository"
+    assert sha256(ckpt) == prov["checkpoint_sha256"], f"{prov['checkpoint']} changed since {path.name} was written"
+
+
+PINNED = [(p, r) for p, r in RECORDS if "pinned" in r]
+
+
+@pytest.mark.parametrize("path,rec", PINNED, ids=[str(p.relative_to(DATA_DIR)) for p, _ in PINNED])
+def test_a_records_pinned_episodes_fly_again_to_the_same_costs(path, rec):
+    prov = _evaluation(rec)
+    controller = load_controller(ROOT / prov["checkpoint"])
+    cfg = FlockConfig(**rec["config"])
+    controller.cfg = cfg
+    k = rec["pinned"]["episodes"]
+    r0, v0 = sample_initial_state(cfg, prov["episodes"], torch.Generator().manual_seed(prov["episodes_seed"]))
+    cost = flocking_cost(rollout(controller, cfg, r0[:k], v0[:k]).v)
+    expert = rollout(ExpertController(cfg), cfg, r0[:k], v0[:k]).cost
+    assert torch.allclose(cost / expert, torch.tensor(rec["pinned"]["relative_cost"]), rtol=2e-3), \
+        f"{path.name}: the pinned episodes now cost {(cost / expert).tolist()}"
+
+
+def test_provenance_samples_the_load_and_needs_a_command():
+    with pytest.raises(ValueError, match="command"):
+        Provenance("")
+    with Provenance("python -c pass", interval=0.01) as prov:
+        sum(range(10 ** 5))
+    rec = prov.record(seed=1, episodes=2)
+    assert rec["load_average_max"] >= rec["load_average_mean"] >= 0 and rec["episodes_seed"] == 1
+    with pytest.raises(RuntimeError):
+        Provenance("x").record()
