@@ -35,7 +35,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
-from vgai_lite.book import EVAL_SEED, QUICK, pick, prose
+from vgai_lite.book import EVAL_SEED, QUICK, VALIDATION_SEED, pick, prose
 from vgai_lite.paper import PAPER
 from vgai_lite.evaluate import CLOSE_CALLS
 from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
@@ -238,8 +238,22 @@ print(inspect.getsource(controllers.local_control).split('"""')[-1])
 # %% [markdown]
 # ## 7. Both controllers at work
 #
-# We fly the same initial conditions under both controllers. (Held-out seed `EVAL_SEED`; every
-# evaluation in the book uses it, and training never draws from it.)
+# We fly the same initial conditions under both controllers.
+#
+# **Three sets of initial conditions, never mixed.** A number means something only if nothing was
+# chosen by looking at it. The book draws its episodes from three seeds, named in `vgai_lite/book.py`:
+#
+# | episodes | seed | used for |
+# |---|---|---|
+# | training | a run's own seed (its per-round checks at a fixed offset from it) | what a controller learns from |
+# | **validation** | `VALIDATION_SEED` | every choice: a design, a recipe, a hyperparameter ($\rho$ below), which of several training seeds to ship |
+# | **test** | `TEST_SEED` | only the numbers the book reports for the controllers it ships; nothing is chosen on them |
+#
+# Why: a choice made on the episodes that are then reported flatters the choice (with enough
+# variants, one looks good on those episodes by luck). `EVAL_SEED`'s episodes were the book's
+# held-out episodes before this rule; recipes were compared on them, so they are no longer a test.
+# This chapter's pictures and tables use them; the headline figures of the shipped controllers are
+# flown on the test episodes (their records in `data/` say which seed each number came from).
 
 # %%
 expert, local = ExpertController(cfg), LocalController(cfg)
@@ -344,15 +358,16 @@ for name, traj in trajs.items():
 # initial conditions and the saturation, not by the alignment rule. A learned controller must keep
 # this braking: the repulsion lives in a few samples at the start of a few episodes.
 #
-# **Why $\rho$ = 0.5 m.** The paper gives no value. A sweep (fewer episodes per value than above),
-# with the local swarm's mean number of neighbours at the end of the episode:
+# **Why $\rho$ = 0.5 m.** The paper gives no value. A sweep on validation episodes (fewer per value
+# than above), with the local swarm's mean number of neighbours at the end of the episode:
 
 # %%
 rows = []
 for rho in (0.3, 0.5, 0.75, 1.0):
     c = cfg.replace(rho=rho)
-    res = relative_cost(LocalController(c), c, episodes=pick(20, 2), seed=EVAL_SEED)
-    end = rollout(LocalController(c), c, r0[:pick(20, 2)], v0[:pick(20, 2)]).r[-1]
+    res = relative_cost(LocalController(c), c, episodes=pick(20, 2), seed=VALIDATION_SEED)  # a choice: validation episodes
+    r_val, v_val = sample_initial_state(c, pick(20, 2), torch.Generator().manual_seed(VALIDATION_SEED))
+    end = rollout(LocalController(c), c, r_val, v_val).r[-1]
     degree = (pairwise_offsets(end)[2] <= c.R ** 2).sum(-1).double().mean().item()
     rows.append(f"| {rho:.2f} | {res.expert_cost.mean():.1f} | {res.cost.mean():.1f} | "
                 f"{res.mean_ratio:.2f} | {degree:.1f} |")
