@@ -292,7 +292,7 @@ plt.show()
 # %% [markdown]
 # Two things to keep in mind for the rest of the book. The expert works **early**: it is saturated
 # for the first few tenths of a second and idle after about one second. And so is the **cost**: most
-# of eq. 1 accrues in the first steps (section 10 of notebook 03 measures how much).
+# of eq. 1 accrues in the first steps (the cell below measures how much).
 
 # %%
 var = velocity_variance(trajs["Centralized"].v)  # (T, B)

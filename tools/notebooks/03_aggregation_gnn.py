@@ -48,7 +48,7 @@ print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} held
 # %% [markdown]
 # ## 1. Six exact local features
 #
-# The DAGNN's input at agent $i$ (Tolstaya et al.; the paper's hidden eq. after the figure 4 caption):
+# The DAGNN's input at agent $i$ (Tolstaya et al. 2019, who introduced the DAGNN; the VGAI paper uses it without printing it):
 #
 # $$\mathbf x_i(t) = \Big[\sum_{j\in\mathcal N_i}(\mathbf v_i - \mathbf v_j),\ \ \sum_{j\in\mathcal N_i}\frac{\mathbf r_{ij}}{\|\mathbf r_{ij}\|^4},\ \ \sum_{j\in\mathcal N_i}\frac{\mathbf r_{ij}}{\|\mathbf r_{ij}\|^2}\Big] \in \mathbb R^6 .$$
 #
@@ -300,7 +300,7 @@ display(Markdown("| GSO (trained at N = 50) | N' = 50 | N' = 75 | N' = 100 |\n|-
 #
 # ## 10. What the cost measures, and what it does not
 #
-# Eq. 1 scores velocity agreement only. Most of it accrues in the first steps (measured below), while the expert
+# Eq. 1 scores velocity agreement only. Most of it accrues in the first steps (notebook 01, section 7, measured how much), while the expert
 # is saturated at ±30 m/s², so the expert is not even optimal for eq. 1: a *local* rule that aligns
 # harder can beat it. And a rule that ignores collisions altogether is rewarded for it. The local
 # heuristic with other gains on its two sums (alignment, repulsion):

@@ -1,7 +1,7 @@
 # %% [markdown]
 # # 06 · VGAI: the CNN and the GNN trained together, end to end
 #
-# *Paper: section 3.4, figures 1 and 3; Table 1a.*
+# *Paper: section 3.3 (K-step BPTT, figure 3) and figure 1; Table 1a.*
 #
 # Everything is in place: each drone renders its view (notebook 04), a CNN turns it into $F$ features
 # (notebook 05), the features travel through the delayed aggregation sequence (notebook 02), and a
