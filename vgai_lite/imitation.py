@@ -39,9 +39,10 @@ VALIDATION_SEED_OFFSET = 1000
 def dagger_mix(u_learner: torch.Tensor, u_expert: torch.Tensor, p: float,
                generator: torch.Generator) -> torch.Tensor:
     """DAgger's mixing rule: each swarm (first axis) applies the learner's actions with probability
-    p, else the expert's; one coin per swarm and step. u_learner, u_expert (B, N, 2) -> (B, N, 2).
+    p, else the expert's; one coin per swarm and step. u_learner, u_expert (B, N, 2) -> (B, N, 2);
+    p a number, or one per swarm (B,).
     The library twin of exercise 06.1."""
-    follow = torch.rand(u_expert.shape[0], generator=generator) < p
+    follow = torch.rand(u_expert.shape[0], generator=generator) < torch.as_tensor(p)
     return torch.where(follow.to(u_expert.device)[:, None, None], u_learner, u_expert)
 
 
@@ -61,7 +62,7 @@ def fly_dagger(learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_
         Z = learner.observe(r, v) if learner is not None else None
         u_star = expert_control(r, v, cfg)
         u = u_star
-        if learner is not None and p_learner > 0:
+        if learner is not None and bool((torch.as_tensor(p_learner) > 0).any()):
             u = dagger_mix(learner.act(Z), u_star, p_learner, generator)
         record(t, r, v, u_star, Z)
         r, v = step(r, v, saturate(u, cfg), cfg)

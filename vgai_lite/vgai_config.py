@@ -18,7 +18,7 @@ from .vision import VisionConfig
 
 
 OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight", "flight_steps", "mlp_on_exact",
-                   "anchor_weight", "joint_early_share")
+                   "anchor_weight", "joint_early_share", "learner_swarms")
 """Fields added in the consensus round (notebook 06, section 6); a stored config without them had 0."""
 
 PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0}
@@ -66,6 +66,10 @@ class VGAITrainConfig:
             braking (issue 24, hypothesis 1).
         joint_early_share: stage 3's own early_share (0: early_share's), for its windows only, so that
             stages 1 and 2 (and the cached stage 1) stay as they were (hypothesis 1).
+        learner_swarms: the share of each DAgger round's swarms that the learner flies alone (p = 1
+            at every step), the others under the paper's mixture (p_learner): the states the
+            learner's own drifting leads to, late in a flight, labelled with the expert's braking
+            (hypothesis 1).
         mlp_on_exact: stage 2 fits the MLP on the CNN's features corrected through the aux head
             (``exact_through_aux``) so that they read as the exact local features, as the modular
             vision pilot's MLP learned its response on exact features (hypothesis 2).
@@ -102,6 +106,7 @@ class VGAITrainConfig:
     aux_weight: float = 5.0
     flight_steps: int = 0
     joint_early_share: float = 0.0
+    learner_swarms: float = 0.0
     mlp_on_exact: bool = False
     anchor_weight: float = 0.0
 

@@ -240,8 +240,11 @@ def _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cac
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
     for rnd in range(tcfg.dagger_rounds):
         model.eval()
-        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), tcfg.p_learner, gen,
-                  steps)
+        p = tcfg.p_learner
+        if tcfg.learner_swarms:  # some swarms flown by the learner alone
+            alone = torch.rand(tcfg.episodes_per_round, generator=gen) < tcfg.learner_swarms
+            p = torch.where(alone, 1.0, tcfg.p_learner)
+        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), p, gen, steps)
         history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
                                              desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}")
         validate(f"DAgger round {rnd + 1}")

@@ -49,6 +49,7 @@ def main(argv=None) -> int:
     p.add_argument("--mlp-on-exact", action="store_true", default=None,
                    help="stage 2 on the CNN's features read as the exact ones (hypothesis 2)")
     p.add_argument("--joint-early-share", type=float, default=None, help="stage 3's windows' early share (hypothesis 1)")
+    p.add_argument("--learner-swarms", type=float, default=None, help="share of DAgger swarms the learner flies alone")
     p.add_argument("--anchor-weight", type=float, default=None, help="stage 3 anchor loss (hypothesis 2)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
@@ -63,7 +64,8 @@ def main(argv=None) -> int:
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
                                  ("flight_steps", args.flight_steps), ("mlp_on_exact", args.mlp_on_exact),
-                                 ("anchor_weight", args.anchor_weight), ("joint_early_share", args.joint_early_share)) if v is not None}
+                                 ("anchor_weight", args.anchor_weight), ("joint_early_share", args.joint_early_share),
+                                 ("learner_swarms", args.learner_swarms)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
     folder = DATA_DIR / "experiments"
     command = " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:]))
