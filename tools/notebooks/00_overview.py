@@ -84,10 +84,13 @@ paper_vs_book.show()
 #   module per stage of the pipeline. When a notebook calls a function, open its file: the
 #   docstring carries the equation and the shapes of every tensor, with the paper's symbols
 #   ($\mathbf S$, $\mathbf X$, $\mathbf Z$, $K$, $F$, $R$, $\rho$).
-# * **Exercises** end each notebook: you write a real piece of the method and an automatic check
-#   tells you whether it is right, and if not, on which input it went wrong; the last cell gives
+# * **Exercises** end each notebook: you write a real piece of the method (among them the GSO's
+#   normalisation, DAgger's data aggregation and the K-step BPTT loss) and an automatic check
+#   tells you whether it is right, and if not, on which input it went wrong and which mistake that
+#   suggests; the open-ended experiments also ask for your written conclusion; the last cell gives
 #   your score. Instructors: `python -m vgai_lite student-copies` writes copies without the
-#   solutions and `python -m vgai_lite grade` scores a student's notebook (see the README).
+#   solutions and `python -m vgai_lite grade` scores a student's notebook; the exercise cells
+#   carry nbgrader's metadata, so nbgrader generates and autogrades them too (see the README).
 # * **Quick mode.** Setting the environment variable `VGAI_LITE_QUICK=1` shrinks every loop (fewer
 #   episodes, steps and epochs) so a notebook runs in seconds; the test suite runs the book this
 #   way. The library reads the variable in one place, `vgai_lite/book.py`:
