@@ -362,13 +362,15 @@ prose("On the same 50 evaluation flights, the heavier state-estimation loss give
 #   beside the action loss (`mlp_on_exact`, `anchor_weight`);
 # * **the learner flying alone** (hypothesis 1): a share of each DAgger round's swarms is flown by
 #   the learner at every step (`learner_swarms`), so that the states its own drifting leads to are in
-#   the data.
+#   the data; and the same with three quarters of stage 3's windows drawn uniformly over the flight
+#   instead of a quarter (`joint_early_share`), so that those states weigh in the loss.
 
 # %%
 VARIANTS = [("the book's recipe (the shipped vgai_F24)", "vgai_F24_validation"),
             ("longer flights, windows over them", "vgai_late500"),
             ("MLP fitted on exact features, anchored", "vgai_exact_mlp"),
-            ("... + the learner flying alone in half the DAgger swarms, longer flights", "vgai_exact_learner")]
+            ("the learner flying alone in half the DAgger swarms", "vgai_learner"),
+            ("... and three quarters of stage 3's windows drawn over the whole flight", "vgai_learner_late")]
 VARIANTS = [(label, name) for label, name in VARIANTS if (DATA_DIR / "experiments" / f"{name}.json").is_file()]
 variant_recs, rows = {}, []
 for label, name in VARIANTS:
