@@ -55,6 +55,28 @@ def _recipe(rec: dict) -> str:
     return "" if rec["train_config"].get("motion_features") else " (last round's plain CNN)"
 
 
+TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3", "vgai_F24": "VGAI, F = 24, K-1 = 3 (the shipped recipe)"}
+
+
+def _test_table() -> list:
+    """The headline figures on the test episodes (data/test/, tools/test_episodes.py), if any."""
+    recs = {p.stem: json.loads(p.read_text()) for p in sorted((ROOT / "data" / "test").glob("*.json"))}
+    if not recs:
+        return []
+    first = next(iter(recs.values()))
+    rows = ["| controller | relative cost (95% CI) | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | "
+            "episodes < 0.05 m (expert) | median closest [m] (expert) |", "|---|---|---|---|---|---|"]
+    for name, r in recs.items():
+        rows.append(f"| {TEST_LABELS.get(name, name)} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
+                    f"{r['share_connected_at_end']:.0%} | {r['share_below_0.05m']:.0%} ({r['expert_share_below_0.05m']:.0%}) | "
+                    f"{r['median_min_distance']:.3f} ({r['expert_median_min_distance']:.3f}) |")
+    return [f"**On the test episodes** ({first['episodes']} episodes of seed {first['seed']}, never used for a choice; "
+            "`python tools/test_episodes.py`, records with their provenance in `data/test/`):", "", *rows, "",
+            "The tables below were computed on the book's earlier held-out episodes (seed "
+            f"{_load('data/dagnn/dagnn_K4.json')['seed']}), on which recipes were also compared; they move to the test "
+            "episodes when they are next recomputed.", ""]
+
+
 def section() -> str:
     dagnn = {k: _load(f"data/dagnn/dagnn_K{k}.json") for k in (1, 2, 3, 4)}
     vgai = {n: _load(f"data/vgai/vgai_{n}.json") for n in ("F24", "F12", "F6", "K3", "K2")}
@@ -97,6 +119,7 @@ def section() -> str:
     ]
     d4, v24 = dagnn[4], vgai["F24"]
     text = [
+        *_test_table(),
         f"All on {eps} held-out episodes (seed {d4['seed']}) unless stated, N = 50, R = 1.5 m, v_init = 3 m/s; "
         "relative cost = cost of eq. 1 over the centralized expert's cost on the same initial conditions.",
         "",

@@ -465,10 +465,15 @@ harder = {s: x["forcing_at_rest_rms_median"] / pilot["forcing_at_rest_rms_median
 per_seed = "; ".join(f"seed {s} brakes {weaker[s]:.1f}× more weakly and pushes {harder[s]:.1f}× as hard" for s in seeds)
 common = ("Every seed brakes more weakly than the pilot: the limit they share is the damping gain, not a push at rest"
           if min(weaker.values()) > 1.5 else "The seeds do not share one limit")
-prose("At 5 s, against the modular pilot: {per_seed}. {common}. The end-to-end MLP learned its response from the "
-      "CNN's *estimated* features, and a regression whose inputs are noisy leans on them less (a smaller gain); the "
-      "pilot's MLP learned its gain on the exact features. A next experiment: fit stage 2 on the exact features through "
-      "the aux head, or anchor the MLP's response to the velocity features.", per_seed=per_seed, common=common)
+exact = variant_recs.get("vgai_exact_mlp")
+tested = ("" if exact is None else
+          " The variants above tested that explanation: the MLP fitted on exact features and anchored to them ends at "
+          f"{exact['velocity_variance_median']['5s']:.1e} m²/s² at 5 s against the recipe's {base:.1e} on the same "
+          "validation episodes, " + ("most of the way to the pilot." if exact['velocity_variance_median']['5s'] < 0.2 * base
+                                     else "so where the MLP learned its gain is not the whole story."))
+prose("At 5 s, against the modular pilot: {per_seed}. {common}. One explanation: the end-to-end MLP learned its response "
+      "from the CNN's *estimated* features, and a regression whose inputs are noisy leans on them less (a smaller gain); "
+      "the pilot's MLP learned its gain on the exact features.{tested}", per_seed=per_seed, common=common, tested=tested)
 
 # %% [markdown]
 # ## 7. Exercise 06.1: DAgger's mixing rule
