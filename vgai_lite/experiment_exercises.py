@@ -16,7 +16,7 @@ from typing import Callable
 import torch
 
 from .consensus import velocity_variance
-from .exercises import CheckResult, _as_tensor, _close, _fresh_generator, _run
+from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
 
 
 def check_circular_conv(student_cls: Callable) -> CheckResult:
@@ -31,7 +31,7 @@ def check_circular_conv(student_cls: Callable) -> CheckResult:
             H, W = int(torch.randint(3, 6, (1,), generator=g)), int(torch.randint(8, 40, (1,), generator=g))
             layer = student_cls(c_in, c_out)
             if not isinstance(layer, torch.nn.Module):
-                raise TypeError(f"expected an nn.Module, got {type(layer).__name__}")
+                raise AnswerMismatch(f"expected an nn.Module, got {type(layer).__name__}")
             x = torch.randn(2, c_in, H, W, generator=g)
             with torch.no_grad():
                 y = _as_tensor(layer(x), (2, c_out, H, W), "the output")
