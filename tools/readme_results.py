@@ -55,7 +55,9 @@ def _recipe(rec: dict) -> str:
     return "" if rec["train_config"].get("motion_features") else " (last round's plain CNN)"
 
 
-TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3", "vgai_F24": "VGAI, F = 24, K-1 = 3 (the shipped recipe)"}
+TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3", "vgai_F24": "VGAI, F = 24, K-1 = 3 (the shipped recipe)",
+               "vgai_learner": "VGAI, F = 24, K-1 = 3, + the learner flying alone in half the DAgger swarms "
+                               "(one training seed, `data/experiments/vgai_learner.pt`; notebook 06)"}
 
 
 def _test_table() -> list:

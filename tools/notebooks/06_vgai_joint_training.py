@@ -400,6 +400,38 @@ prose("On these validation episodes the book's recipe ends at a velocity varianc
                "It is still above this book's flocking bar (2e-3 m²/s² at 5 s)."))
 
 # %% [markdown]
+# **Why the learner must fly alone.** Under the paper's mixture (the learner followed with
+# probability 0.33 at each step) the expert flies two steps in three, and the mixture brakes almost
+# as hard as the expert: every stored swarm aligns within a fraction of a second. The stored
+# flights then hold almost no state in which drones drift past each other at the speeds the learner
+# leaves behind, and no label that says "brake that": the learner is never shown its own late
+# mistake. Longer flights alone make it worse (their extra states are aligned ones, labelled "do
+# nothing"); fitting the MLP on exact features helps a little. Swarms that the learner flies alone
+# put its drifting states in the data, each labelled with the expert's braking, which is what
+# DAgger is for. The paper's rule stays for the other swarms.
+#
+# Chosen on validation episodes, the learner-alone variant is then flown once on the **test**
+# episodes (`python tools/test_episodes.py --controller data/experiments/vgai_learner.pt --name vgai_learner`),
+# beside the shipped controllers:
+
+# %%
+TEST = {name: json.loads((DATA_DIR / "test" / f"{name}.json").read_text())
+        for name in ("dagnn_K4", "vgai_F24", "vgai_learner", "local") if (DATA_DIR / "test" / f"{name}.json").is_file()}
+LABELS = {"dagnn_K4": "DAGNN (exact features)", "vgai_F24": "VGAI, the shipped recipe",
+          "vgai_learner": "VGAI, + the learner flying alone (one training seed)", "local": "Local heuristic"}
+rows = []
+for name, rec in TEST.items():
+    var, lo_hi = rec["velocity_variance_median"], rec["relative_cost_mean_ci95"]
+    rows.append(f"| {LABELS[name]} | **{rec['relative_cost_mean']:.2f}** ({lo_hi[0]:.2f}-{lo_hi[1]:.2f}) | {var['2s']:.1e} | "
+                f"{var['5s']:.1e} ({var['5s'] ** 0.5:.3f} m/s RMS) | {rec['share_connected_at_end']:.0%} | "
+                f"{rec['share_below_0.05m']:.0%} ({rec['expert_share_below_0.05m']:.0%}) | "
+                f"{rec['median_min_distance']:.3f} ({rec['expert_median_min_distance']:.3f}) |")
+first = next(iter(TEST.values()))
+display(Markdown(f"On the test episodes ({first['episodes']} episodes, seed {first['seed']}):\n\n"
+                 "| controller | relative cost (95% CI) | variance at 2 s [m²/s²] | at 5 s | connected at 5 s | "
+                 "episodes < 0.05 m (expert) | median closest [m] (expert) |\n|---|---|---|---|---|---|---|\n" + "\n".join(rows)))
+
+# %% [markdown]
 # **Training seeds.** Three trainings of the book's recipe that differ only in the seed, each
 # evaluated like the rows above. The book's `vgai_F24` is the one with the lowest relative cost on
 # separate *selection* episodes, never on the evaluation episodes of every table
