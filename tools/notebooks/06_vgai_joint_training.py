@@ -645,6 +645,7 @@ else:
 # * VGAI trains the CNN and the MLP together by K-step backpropagation through time; the book warm-starts both first, to train in minutes.
 # * A low cost is not flocking. A plain CNN estimates velocity disagreements with a bias that depends on where the neighbours stand, a steady push; features odd in the motion channels read exactly zero when nothing moves, and VGAI then aligns several times closer.
 # * Judge a learned controller over a longer horizon than its training episodes.
+# * DAgger must show the learner its own mistakes: with the paper's per-step mixture the expert keeps every swarm aligned, so the learner never sees itself drift; swarms flown by the learner alone taught VGAI to brake (section 6, on validation and test episodes).
 #
 # ## Next
 #
