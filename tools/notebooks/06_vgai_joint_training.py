@@ -410,6 +410,11 @@ prose("On these validation episodes the book's recipe ends at a velocity varianc
 # put its drifting states in the data, each labelled with the expert's braking, which is what
 # DAgger is for. The paper's rule stays for the other swarms.
 #
+# A caution the table also shows: the same change with three quarters of stage 3's windows drawn
+# over the whole flight (instead of a quarter) does not brake. Each row is one training, one seed;
+# until the learner-alone recipe is trained from several seeds, the book cannot tell a recipe from
+# a lucky seed. That is the next step, before it becomes the recipe of the shipped VGAIs.
+#
 # Chosen on validation episodes, the learner-alone variant is then flown once on the **test**
 # episodes (`python tools/test_episodes.py --controller data/experiments/vgai_learner.pt --name vgai_learner`),
 # beside the shipped controllers:
