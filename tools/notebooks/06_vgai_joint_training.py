@@ -352,7 +352,7 @@ prose("On the same 50 evaluation flights, the heavier state-estimation loss give
 # in `data/experiments/` with their provenance; "load" is the machine's mean load average during the
 # training, about 2 when two trainings shared the two cores):
 #
-# * **longer flights, windows drawn over them** (hypothesis 1): every stored flight lasts 500 steps
+# * **longer flights, windows drawn over them** (hypothesis 1): every stored flight runs on to the horizon where the variance is read,
 #   and half of stage 3's windows are drawn uniformly over it, so the drifting a learner does after
 #   2 s is labelled with the expert's braking (`flight_steps`, `joint_early_share`);
 # * **the MLP's response fitted on exact features** (hypothesis 2): stage 2 fits the MLP on the
