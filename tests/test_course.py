@@ -141,7 +141,9 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
 @pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
 def test_grader_gives_zero_to_untouched_student_copies(path, student_dir):
     student = grade_notebook(student_dir / path.name)
-    assert student["cell_errors"] == [], "a student copy must execute to the end"
+    # only the check cells fail (they raise when a check does not pass, for nbgrader); every other cell runs
+    assert all(e["error"].startswith("AssertionError") for e in student["cell_errors"]), student["cell_errors"]
+    assert len(student["cell_errors"]) == student["max_score"], "one failing check cell per exercise"
     assert student["score"] == 0 and student["max_score"] == len(exercises_of(path.name[:2]))
     for e in student["exercises"].values():
         assert not e["passed"] and "not implemented" in e["message"]
