@@ -69,7 +69,7 @@ def test_score_counts_this_sessions_checks(capsys):
 
     assert not check_dagger_mix(wrong)
     result = score("06")
-    assert result["exercises"]["06.1"] is False and result["max_score"] == len(exercises_of("06")) == 2
+    assert result["exercises"]["06.1"] is False and result["max_score"] == len(exercises_of("06")) == 3
     assert f"/{result['max_score']}" in capsys.readouterr().out
     with pytest.raises(ValueError, match="two-digit"):
         score("6")
@@ -118,10 +118,12 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     import sys
 
     def probe(state, points):
+        ids = exercises_of("02")
         nb = nbformat.v4.new_notebook()
         cell = nbformat.v4.new_code_cell('from vgai_lite.exercises import score\n\nscore("02");', execution_count=1)
+        listing = "".join(f"  {k} {EXERCISES[k]:45s} {state}\n" for k in ids)
         cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=(
-            f"  02.1 {EXERCISES['02.1']:45s} {state}\nScore for notebook 02: {points}/1\n"))]
+            f"{listing}Score for notebook 02: {points}/{len(ids)}\n"))]
         nb.cells = [cell]
         nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
         target = tmp_path / f"02_probe_{points}.ipynb"
@@ -131,9 +133,10 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
                               cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)},
                               capture_output=True, text=True, timeout=300)
 
-    full_marks = probe("PASSED", 1)
+    full_marks = probe("PASSED", len(exercises_of("02")))
     assert full_marks.returncode == 1 and "1 failed" in full_marks.stdout, full_marks.stdout[-2000:]
-    assert "Score for notebook 02: 0/1" in full_marks.stdout  # nbval shows what the cell printed instead
+    # nbval shows what the cell printed instead (its diff abbreviates the line's start)
+    assert f"ook 02: 0/{len(exercises_of('02'))}" in full_marks.stdout, full_marks.stdout[-2000:]
     as_printed = probe("NOT RUN", 0)
     assert as_printed.returncode == 0 and "1 passed" in as_printed.stdout, as_printed.stdout[-2000:]
 

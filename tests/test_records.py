@@ -34,7 +34,7 @@ def _records():
             rec = json.loads(path.read_text())
         except json.JSONDecodeError:
             continue
-        if isinstance(rec, dict) and "provenance" in rec:
+        if isinstance(rec, dict) and "provenance" in rec and path.parent.name != "results":
             out.append((path, rec))
     return out
 
@@ -82,6 +82,20 @@ def test_a_records_pinned_episodes_fly_again_to_the_same_costs(path, rec):
     expert = rollout(ExpertController(cfg), cfg, r0[:k], v0[:k]).cost
     assert torch.allclose(cost / expert, torch.tensor(rec["pinned"]["relative_cost"]), rtol=2e-3), \
         f"{path.name}: the pinned episodes now cost {(cost / expert).tolist()}"
+
+
+REPRODUCE_FIELDS = {"command", "git_commit", "library_modified_since_commit", "python", "torch_threads",
+                    "wall_seconds", "packages", "reproduce_config", "invocations"}
+
+
+def test_the_reproductions_record_names_its_invocations():
+    """``results/results.json`` holds many cells computed by several invocations of ``reproduce``:
+    its provenance names each invocation (command, commit, wall time) rather than one evaluation."""
+    prov = json.loads((DATA_DIR / "results" / "results.json").read_text())["provenance"]
+    assert REPRODUCE_FIELDS <= set(prov), f"missing {REPRODUCE_FIELDS - set(prov)}"
+    assert prov["packages"]["torch"].startswith("2.13.0")
+    for inv in prov["invocations"]:
+        assert {"command", "git_commit", "wall_seconds", "started"} <= set(inv), inv
 
 
 def test_provenance_samples_the_load_and_needs_a_command():

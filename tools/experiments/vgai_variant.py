@@ -80,7 +80,8 @@ def main(argv=None) -> int:
     with Provenance(command) as eval_prov:
         res = relative_cost(controller, cfg, episodes=args.episodes, seed=VALIDATION_SEED, name=args.name)
     print(res)
-    out = {"command": command, "note": args.note, "base": args.base, "changes": changes, "train_config": tcfg.to_dict(),
+    out = {"command": command, "note": args.note, "base": args.base, "changes": changes, "config": dataclasses.asdict(cfg),
+           "train_config": tcfg.to_dict(),
            "train_seconds": round(hist["seconds"], 1), "stage1_cached": hist.get("stage1_cached"),
            "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
            "evaluation_seconds": round(eval_prov.seconds, 1), "validation": hist["rounds"], **res.summary(),
