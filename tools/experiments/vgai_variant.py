@@ -51,6 +51,8 @@ def main(argv=None) -> int:
     p.add_argument("--joint-early-share", type=float, default=None, help="stage 3's windows' early share (hypothesis 1)")
     p.add_argument("--learner-swarms", type=float, default=None, help="share of DAgger swarms the learner flies alone")
     p.add_argument("--anchor-weight", type=float, default=None, help="stage 3 anchor loss (hypothesis 2)")
+    p.add_argument("--channels", default=None,
+                   help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
@@ -67,6 +69,11 @@ def main(argv=None) -> int:
                                  ("anchor_weight", args.anchor_weight), ("joint_early_share", args.joint_early_share),
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
+    if args.channels is not None:  # a change inside the vision configuration: recorded by name
+        channels = tuple(args.channels.split(","))
+        render = dataclasses.replace(tcfg.vision.render, channels=channels)
+        tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
+        changes["channels"] = list(channels)
     folder = DATA_DIR / "experiments"
     command = " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:]))
     ckpt = Path(args.evaluate) if args.evaluate else folder / f"{args.name}.pt"
