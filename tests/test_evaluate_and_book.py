@@ -174,3 +174,15 @@ def test_findings_use_one_criterion():
     assert findings.trend([b, a], -1) == findings.CONTRADICTED
     assert findings.trend([a, b, c], -1) == findings.CANNOT_TELL
     assert "cannot be told" in findings.sentence("x", findings.CANNOT_TELL, [a, b], [6, 24])
+
+
+def test_flocked_reads_the_variance_at_5_s_and_the_connectivity():
+    from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked
+
+    rec = {"velocity_variance_median": {"2s": 1.0, "5s": FLOCKED_VARIANCE}, "share_connected_at_end": FLOCKED_CONNECTED,
+           "flocking_horizon_s": 5.0}
+    assert flocked(rec)
+    assert not flocked({**rec, "velocity_variance_median": {"2s": 0.0, "5s": 1.01 * FLOCKED_VARIANCE}})
+    assert not flocked({**rec, "share_connected_at_end": FLOCKED_CONNECTED - 0.02})
+    with pytest.raises(ValueError, match="5 s"):
+        flocked({"velocity_variance_median": {"2s": 0.0}, "share_connected_at_end": 1.0, "flocking_horizon_s": 2.0})

@@ -26,6 +26,22 @@ FLOCK_TIMES = (2.0, 5.0)
 """Seconds at which ``relative_cost`` reads the velocity variance: 2 s (the end of the paper-length
 episode, T = 200 steps) and 5 s (the same flights flown on: a longer horizon exposes disagreements
 that eq. 1, mostly spent in the first steps, hides)."""
+FLOCKED_VARIANCE = 2e-3
+"""m²/s²: the book's definition of "flocked" (the paper gives none beyond a relative cost below 3,
+which notebook 07 shows too weak): the median velocity variance at 5 s at most this, i.e. the
+drones' velocities disagree by at most 0.045 m/s RMS, less than half a body length per second, and
+the communication graph connected at 5 s in at least FLOCKED_CONNECTED of the episodes."""
+FLOCKED_CONNECTED = 0.9
+
+
+def flocked(summary: dict) -> bool:
+    """Whether a record (``RelativeCost.summary()``) says the controller flocked: FLOCKED_VARIANCE
+    at 5 s and FLOCKED_CONNECTED. A record flown without the 5 s figures cannot say (ValueError)."""
+    var = summary.get("velocity_variance_median", {})
+    if "5s" not in var or "share_connected_at_end" not in summary or summary.get("flocking_horizon_s") != 5.0:
+        raise ValueError("flocked() needs a record with the velocity variance at 5 s and the share connected "
+                         f"at 5 s (relative_cost with flock_times reaching 5.0); got keys {sorted(summary)}")
+    return var["5s"] <= FLOCKED_VARIANCE and summary["share_connected_at_end"] >= FLOCKED_CONNECTED
 
 
 @dataclass
