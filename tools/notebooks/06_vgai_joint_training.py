@@ -34,6 +34,7 @@ from IPython.display import Markdown, display
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
 from vgai_lite.dagnn_training import train_dagnn
+from vgai_lite.evaluate import flocked
 from vgai_lite.imitation import load_or_train
 from vgai_lite.paper import PAPER
 from vgai_lite.runs import DAGNN_RUNS, book_vgai
@@ -411,30 +412,89 @@ prose("On these validation episodes the book's recipe ends at a velocity varianc
 # DAgger is for. The paper's rule stays for the other swarms.
 #
 # A caution the table also shows: the same change with three quarters of stage 3's windows drawn
-# over the whole flight (instead of a quarter) does not brake. Each row is one training, one seed;
-# until the learner-alone recipe is trained from several seeds, the book cannot tell a recipe from
-# a lucky seed. That is the next step, before it becomes the recipe of the shipped VGAIs.
-#
-# Chosen on validation episodes, the learner-alone variant is then flown once on the **test**
-# episodes (`python tools/test_episodes.py --controller data/experiments/vgai_learner.pt --name vgai_learner`),
+# over the whole flight (instead of a quarter) does not brake. One training is one seed; so the
+# learner-alone variant was trained from two more seeds, each with its own first stage, and judged
+# on the same validation episodes. "Flocked" is the book's definition (notebook 01,
+# `evaluate.flocked`): velocity variance at 5 s at most 2e-3 m²/s² and the swarm connected in at
+# least 90% of the episodes.
+
+# %%
+SEEDS = {0: "vgai_learner", 1: "vgai_learner_s1", 2: "vgai_learner_s2"}
+learner_recs = {s: json.loads((DATA_DIR / "experiments" / f"{n}.json").read_text())
+                for s, n in SEEDS.items() if (DATA_DIR / "experiments" / f"{n}.json").is_file()}
+rows = []
+for s, rec in learner_recs.items():
+    var, lo_hi = rec["velocity_variance_median"], rec["relative_cost_mean_ci95"]
+    rows.append(f"| {s} | **{rec['relative_cost_mean']:.2f}** ({lo_hi[0]:.2f}-{lo_hi[1]:.2f}) | {var['2s']:.1e} | "
+                f"{var['5s']:.1e} | {rec['share_connected_at_end']:.0%} | {'yes' if flocked(rec) else 'no'} | "
+                f"{rec['share_below_0.05m']:.0%} | {rec['median_min_distance']:.3f} |")
+display(Markdown("| training seed | relative cost (95% CI) | variance at 2 s [m²/s²] | at 5 s | connected at 5 s | "
+                 "flocked | episodes < 0.05 m | median closest [m] |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
+                 + f"\n\n{rec['episodes']} validation episodes (seed {rec['seed']}) per row; "
+                 "`python tools/experiments/vgai_variant.py --name vgai_learner_s1 --learner-swarms 0.5 --seed 1`."))
+
+# %%
+n_flocked = sum(flocked(r) for r in learner_recs.values())
+chosen_seed = min(learner_recs, key=lambda s: learner_recs[s]["relative_cost_mean"])
+chosen_name = SEEDS[chosen_seed]
+lc = [r["relative_cost_mean"] for r in learner_recs.values()]
+lv = [r["velocity_variance_median"]["5s"] for r in learner_recs.values()]
+prose("{k} of {n} training seeds flock by the book's definition; their relative costs run from {lo:.2f} to {hi:.2f} "
+      "and their variances at 5 s from {vlo:.1e} to {vhi:.1e} m²/s². {verdict} The seed with the lowest validation "
+      "cost (seed {chosen}, the rule the book uses for every seed choice) is the one flown on the test episodes below.",
+      k=n_flocked, n=len(learner_recs), lo=min(lc), hi=max(lc), vlo=min(lv), vhi=max(lv), chosen=chosen_seed,
+      verdict=("The learner flying alone is a recipe, not a lucky seed." if n_flocked == len(learner_recs) else
+               "Most seeds flock: the recipe works, but not every training of it." if 2 * n_flocked > len(learner_recs)
+               else "Most seeds do not flock: the first seed was lucky, and the recipe is not settled."))
+
+# %% [markdown]
+# **What the depth channel buys.** The paper's drones see camera images; ours see a gray channel
+# *and* a depth channel, which makes distances free. The same recipe (seed 0, learner alone) trained
+# with the gray channel only (and the motion channel of it), judged on the same validation episodes
+# (`python tools/experiments/vgai_variant.py --name vgai_learner_gray --learner-swarms 0.5 --channels gray`):
+
+# %%
+gray_path = DATA_DIR / "experiments" / "vgai_learner_gray.json"
+if gray_path.is_file():
+    gray, depth = json.loads(gray_path.read_text()), learner_recs[0]
+    rows = []
+    for label, rec in (("gray and depth (the book's)", depth), ("gray only", gray)):
+        var, lo_hi = rec["velocity_variance_median"], rec["relative_cost_mean_ci95"]
+        rows.append(f"| {label} | **{rec['relative_cost_mean']:.2f}** ({lo_hi[0]:.2f}-{lo_hi[1]:.2f}) | {var['2s']:.1e} | "
+                    f"{var['5s']:.1e} | {rec['share_connected_at_end']:.0%} | {'yes' if flocked(rec) else 'no'} | "
+                    f"{rec['share_below_0.05m']:.0%} | {rec['median_min_distance']:.3f} |")
+    display(Markdown("| channels | relative cost (95% CI) | variance at 2 s [m²/s²] | at 5 s | connected at 5 s | flocked | "
+                     "episodes < 0.05 m | median closest [m] |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)))
+    prose("{verdict}", verdict=(
+        "**Gray alone flocks too**: the depth channel is not what makes VGAI flock (cost {g:.2f} against {d:.2f})."
+        .format(g=gray["relative_cost_mean"], d=depth["relative_cost_mean"]) if flocked(gray) else
+        "Gray alone does not flock (variance at 5 s {g5:.1e} against {d5:.1e} m²/s² with depth; cost {g:.2f} against "
+        "{d:.2f}): with this small CNN and this training, the depth channel buys the flocking, a help the paper's "
+        "cameras do not give.".format(g5=gray["velocity_variance_median"]["5s"], d5=depth["velocity_variance_median"]["5s"],
+                                      g=gray["relative_cost_mean"], d=depth["relative_cost_mean"])))
+
+# %% [markdown]
+# Chosen on validation episodes, the learner-alone VGAI is then flown once on the **test**
+# episodes (`python tools/test_episodes.py --controller data/experiments/NAME.pt --name NAME`),
 # beside the shipped controllers:
 
 # %%
 TEST = {name: json.loads((DATA_DIR / "test" / f"{name}.json").read_text())
-        for name in ("dagnn_K4", "vgai_F24", "vgai_learner", "local") if (DATA_DIR / "test" / f"{name}.json").is_file()}
+        for name in ("dagnn_K4", "vgai_F24", chosen_name, "local") if (DATA_DIR / "test" / f"{name}.json").is_file()}
 LABELS = {"dagnn_K4": "DAGNN (exact features)", "vgai_F24": "VGAI, the shipped recipe",
-          "vgai_learner": "VGAI, + the learner flying alone (one training seed)", "local": "Local heuristic"}
+          chosen_name: f"VGAI, + the learner flying alone (training seed {chosen_seed}, chosen on validation)",
+          "local": "Local heuristic"}
 rows = []
 for name, rec in TEST.items():
     var, lo_hi = rec["velocity_variance_median"], rec["relative_cost_mean_ci95"]
     rows.append(f"| {LABELS[name]} | **{rec['relative_cost_mean']:.2f}** ({lo_hi[0]:.2f}-{lo_hi[1]:.2f}) | {var['2s']:.1e} | "
                 f"{var['5s']:.1e} ({var['5s'] ** 0.5:.3f} m/s RMS) | {rec['share_connected_at_end']:.0%} | "
-                f"{rec['share_below_0.05m']:.0%} ({rec['expert_share_below_0.05m']:.0%}) | "
+                f"{'yes' if flocked(rec) else 'no'} | {rec['share_below_0.05m']:.0%} ({rec['expert_share_below_0.05m']:.0%}) | "
                 f"{rec['median_min_distance']:.3f} ({rec['expert_median_min_distance']:.3f}) |")
 first = next(iter(TEST.values()))
 display(Markdown(f"On the test episodes ({first['episodes']} episodes, seed {first['seed']}):\n\n"
-                 "| controller | relative cost (95% CI) | variance at 2 s [m²/s²] | at 5 s | connected at 5 s | "
-                 "episodes < 0.05 m (expert) | median closest [m] (expert) |\n|---|---|---|---|---|---|---|\n" + "\n".join(rows)))
+                 "| controller | relative cost (95% CI) | variance at 2 s [m²/s²] | at 5 s | connected at 5 s | flocked | "
+                 "episodes < 0.05 m (expert) | median closest [m] (expert) |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)))
 
 # %% [markdown]
 # **Training seeds.** Three trainings of the book's recipe that differ only in the seed, each
