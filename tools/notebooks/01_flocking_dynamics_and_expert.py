@@ -37,7 +37,7 @@ from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
 from vgai_lite.book import EVAL_SEED, QUICK, VALIDATION_SEED, pick, prose
 from vgai_lite.paper import PAPER
-from vgai_lite.evaluate import CLOSE_CALLS
+from vgai_lite.evaluate import CLOSE_CALLS, FLOCK_TIMES, FLOCKED_CONNECTED, FLOCKED_VARIANCE
 from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
 
@@ -176,6 +176,20 @@ plt.show()
 #
 # You will write eq. 1 yourself in exercise 01.2, at the end of this notebook; the book uses
 # `vgai_lite.flocking_cost`.
+
+# %% [markdown]
+# **When has a swarm flocked?** A relative cost is an average, and most of eq. 1 accrues in the
+# first steps (section 7 measures how much): a controller can score well and leave its drones
+# drifting past each other for ever. The paper's only criterion is a relative cost below 3. This
+# book uses one operational definition everywhere it says a controller *flocked* (`evaluate.flocked`):
+
+# %%
+prose("A controller **flocked** when, over the episodes it flew, the median velocity variance (the summand of eq. 1) "
+      "at {late:g} s, the same flights flown on past the {T:g} s of an episode, is at most {v:.0e} m²/s², velocities "
+      "that disagree by {rms:.3f} m/s RMS, less than half a body length per second; and the communication graph is "
+      "still connected at {late:g} s in at least {c:.0%} of the episodes. Why {late:g} s: a late horizon shows "
+      "whether the disagreement keeps shrinking, which an average over the first {T:g} s hides.",
+      late=max(FLOCK_TIMES), T=min(FLOCK_TIMES), v=FLOCKED_VARIANCE, rms=FLOCKED_VARIANCE ** 0.5, c=FLOCKED_CONNECTED)
 
 # %% [markdown]
 # ## 5. The collision potential (eq. 3) and the expert (eq. 2)

@@ -414,9 +414,8 @@ prose("On these validation episodes the book's recipe ends at a velocity varianc
 # A caution the table also shows: the same change with three quarters of stage 3's windows drawn
 # over the whole flight (instead of a quarter) does not brake. One training is one seed; so the
 # learner-alone variant was trained from two more seeds, each with its own first stage, and judged
-# on the same validation episodes. "Flocked" is the book's definition (notebook 01,
-# `evaluate.flocked`): velocity variance at 5 s at most 2e-3 m²/s² and the swarm connected in at
-# least 90% of the episodes.
+# on the same validation episodes. "Flocked" is the book's one definition (notebook 01,
+# `evaluate.flocked`): a small velocity variance at 5 s and a swarm still connected.
 
 # %%
 SEEDS = {0: "vgai_learner", 1: "vgai_learner_s1", 2: "vgai_learner_s2"}
