@@ -155,6 +155,16 @@ def _column_reach(block, x: torch.Tensor) -> int:
     return max(abs(c - j) for c in cols) if cols else -1
 
 
+def _excite(block, g: torch.Generator) -> None:
+    """Set every convolution's weights and biases to small positive values (drawn from ``g``)."""
+    with torch.no_grad():
+        for m in block.modules():
+            if isinstance(m, nn.Conv2d):
+                m.weight.copy_(0.05 + 0.25 * torch.rand(m.weight.shape, generator=g))
+                if m.bias is not None:
+                    m.bias.copy_(0.05 + 0.05 * torch.rand(m.bias.shape, generator=g))
+
+
 def _block_shape_failure(y, x, want, pool):
     H, W = x.shape[-2:]
     hint = ""
@@ -220,21 +230,26 @@ def check_residual_block(student_cls: Callable) -> CheckResult:
             block = student_cls(c_in, c_out, pool)
             if not isinstance(block, nn.Module):
                 raise AnswerMismatch(f"expected the block to be an nn.Module, got {type(block).__name__}")
-            x = torch.randn(M, c_in, H, W, generator=g, requires_grad=True)
-            y = block(x)
+            x = torch.randn(M, c_in, H, W, generator=g)
+            with torch.no_grad():
+                y = block(x)
             if tuple(y.shape) != (M, c_out, H // pool, W):
                 return _block_shape_failure(y, x, (M, c_out, H // pool, W), pool)
-            y.sum().backward()
-            if x.grad is None or x.grad.abs().sum() == 0:
+            # probe the wiring with no ReLU dead: positive weights, biases and inputs (a correct
+            # block at its random initialisation can have every unit of a small layer switched off)
+            _excite(block, g)
+            xp = (torch.rand(M, c_in, H, W, generator=g) + 0.1).requires_grad_(True)
+            block(xp).sum().backward()
+            if xp.grad is None or xp.grad.abs().sum() == 0:
                 return False, "the output does not depend on the input (no gradient reaches it)."
-            reach = _column_reach(block, x.detach())
+            reach = _column_reach(block, xp.detach())
             if reach != 2:
                 hint = {1: " That is one 3x3 convolution's reach: the block has two, one after the other.",
                         0: " Columns do not see their neighbours: the convolutions are 3x3 with padding 1."}.get(
                     reach, " Keep the convolutions 3x3 and do not pool or mix across columns.")
                 return False, (f"a change in one column reached {reach} columns to each side; two 3x3 "
                                f"convolutions in a row reach exactly 2.{hint}")
-            failure = _what_is_left(block, x.detach(), c_in, pool) if c_in == c_out else None
+            failure = _what_is_left(block, x, c_in, pool) if c_in == c_out else None
             if failure:
                 return failure
         return True, ("right shapes, rows pooled by averaging, columns kept, two 3x3 convolutions' reach, "
