@@ -6,6 +6,11 @@
   marker): the committed notebooks hold the solutions with full marks, so nbval's run of a notebook
   also checks that every solution still passes its check. The grader's own test
   (tests/test_course.py) therefore grades the solutions of one notebook only, and every student copy.
+* Two at a time: with pytest-xdist (``-n 2 --dist loadfile``, as the README's test command runs),
+  each worker and the notebook kernels it starts use one torch thread (``VGAI_LITE_THREADS``), so
+  two workers do not oversubscribe two cores; a file (a notebook's cells, a module's fixtures) runs
+  on one worker. (``loadgroup`` would split finer, but pytest 9 moved the node ids that xdist 3.8
+  rewrites for it, so its groups are ignored.)
 * ``quick_table_k``: one quick serial reproduction of Table 1b (1 torch thread), shared by the
   reproduction's resume/retrain test and the Ray test, which compares a Ray run with it.
 """
@@ -17,6 +22,8 @@ import pytest
 
 os.environ.setdefault("VGAI_LITE_QUICK", "1")
 os.environ.setdefault("MPLBACKEND", "Agg")
+if os.environ.get("PYTEST_XDIST_WORKER"):  # one of several workers: one thread each (and their kernels)
+    os.environ["VGAI_LITE_THREADS"] = os.environ["OMP_NUM_THREADS"] = "1"
 
 
 def _as_a_notebook_shows_it(item):
@@ -29,6 +36,13 @@ def _as_a_notebook_shows_it(item):
         return compare([o for o in test if o.get("output_type") != "execute_result"], ref, skip_compare)
 
     item.compare_outputs = compare_outputs
+
+
+def pytest_configure(config):
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        import torch
+
+        torch.set_num_threads(1)
 
 
 def pytest_collection_modifyitems(session, config, items):

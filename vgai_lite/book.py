@@ -27,6 +27,21 @@ QUICK: bool = _read_quick()
 """True when the book runs in quick mode (under test): smaller N, fewer steps and episodes."""
 
 
+THREADS_ENV = "VGAI_LITE_THREADS"
+
+
+def threads() -> int:
+    """The torch threads a notebook uses: ``VGAI_LITE_THREADS`` if set (the test suite sets 1 when
+    it runs two notebooks at a time on two cores, so that they do not oversubscribe them), else 2,
+    the cores of the machines the book is written for."""
+    raw = os.environ.get(THREADS_ENV, "").strip()
+    if not raw:
+        return 2
+    if not raw.isdigit() or int(raw) < 1:
+        raise ValueError(f"{THREADS_ENV} must be a positive whole number of threads, got {raw!r}")
+    return int(raw)
+
+
 def pick(full, quick):
     """``quick`` in quick mode, ``full`` otherwise: ``range(pick(2000, 2))``."""
     return quick if QUICK else full

@@ -35,13 +35,13 @@ from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
-from vgai_lite.book import EVAL_SEED, QUICK, VALIDATION_SEED, pick, prose
+from vgai_lite.book import EVAL_SEED, QUICK, VALIDATION_SEED, pick, prose, threads
 from vgai_lite.paper import PAPER
 from vgai_lite.evaluate import CLOSE_CALLS, FLOCK_TIMES, FLOCKED_CONNECTED, FLOCKED_VARIANCE
 from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
 
-torch.set_num_threads(2)
+torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 print("quick mode" if QUICK else "full mode")
 
 # %% [markdown]

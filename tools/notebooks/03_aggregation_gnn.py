@@ -31,7 +31,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, relative_cost, rollout,
                        sample_initial_state)
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
+from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose, threads
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.dagnn_training import DAGNNTrainConfig, train_dagnn
 from vgai_lite.imitation import load_or_train
@@ -40,7 +40,7 @@ from vgai_lite.models import AggregationMLP
 from vgai_lite.paper import PAPER
 from vgai_lite.runs import DAGNN_RUNS
 
-torch.set_num_threads(2)
+torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
 EPISODES = pick(50, 4)
 print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} held-out episodes (seed {EVAL_SEED})")

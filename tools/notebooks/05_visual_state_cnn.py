@@ -27,7 +27,7 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, load_controller, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
+from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose, threads
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.models import VisualCNN
 from vgai_lite.render import CAMERAS
@@ -35,7 +35,7 @@ from vgai_lite.runs import book_estimator
 from vgai_lite.vgai_training import estimator_quality, train_state_estimator
 from vgai_lite.vision import VisionConfig, stored_images
 
-torch.set_num_threads(2)
+torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg, vision = FlockConfig(), VisionConfig()
 print("quick mode" if QUICK else "full mode")
 print(vision)
