@@ -17,6 +17,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.reproduce import PAPER  # noqa: E402
 
@@ -55,9 +56,23 @@ def _recipe(rec: dict) -> str:
     return "" if rec["train_config"].get("motion_features") else " (last round's plain CNN)"
 
 
-TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3", "vgai_F24": "VGAI, F = 24, K-1 = 3 (the shipped recipe)",
-               "vgai_learner": "VGAI, F = 24, K-1 = 3, + the learner flying alone in half the DAgger swarms "
-                               "(one training seed, `data/experiments/vgai_learner.pt`; notebook 06)"}
+TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3", "vgai_F24": "VGAI, F = 24, K-1 = 3 (the shipped recipe)"}
+
+LEARNER_SEEDS = {0: "vgai_learner", 1: "vgai_learner_s1", 2: "vgai_learner_s2"}
+"""The learner-alone recipe's trainings (data/experiments/, notebook 06), by training seed."""
+
+
+def _label(name: str) -> str:
+    if name in TEST_LABELS:
+        return TEST_LABELS[name]
+    seed = {v: k for k, v in LEARNER_SEEDS.items()}.get(name)
+    if seed is None:
+        return name
+    val = {n: _load(f"data/experiments/{n}.json")["relative_cost_mean"] for n in LEARNER_SEEDS.values()
+           if (ROOT / "data" / "experiments" / f"{n}.json").is_file()}
+    chosen = f", the lowest validation cost of {len(val)} seeds" if min(val, key=val.get) == name else ""
+    return (f"VGAI, F = 24, K-1 = 3, + the learner flying alone in half the DAgger swarms (training seed {seed}"
+            f"{chosen}; `data/experiments/{name}.pt`; notebook 06)")
 
 
 def _test_table() -> list:
@@ -67,13 +82,16 @@ def _test_table() -> list:
         return []
     first = next(iter(recs.values()))
     rows = ["| controller | relative cost (95% CI) | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | "
-            "episodes < 0.05 m (expert) | median closest [m] (expert) |", "|---|---|---|---|---|---|"]
+            "flocked | episodes < 0.05 m (expert) | median closest [m] (expert) |", "|---|---|---|---|---|---|---|"]
     for name, r in recs.items():
-        rows.append(f"| {TEST_LABELS.get(name, name)} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
-                    f"{r['share_connected_at_end']:.0%} | {r['share_below_0.05m']:.0%} ({r['expert_share_below_0.05m']:.0%}) | "
+        rows.append(f"| {_label(name)} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
+                    f"{r['share_connected_at_end']:.0%} | {'yes' if flocked(r) else 'no'} | "
+                    f"{r['share_below_0.05m']:.0%} ({r['expert_share_below_0.05m']:.0%}) | "
                     f"{r['median_min_distance']:.3f} ({r['expert_median_min_distance']:.3f}) |")
     return [f"**On the test episodes** ({first['episodes']} episodes of seed {first['seed']}, never used for a choice; "
-            "`python tools/test_episodes.py`, records with their provenance in `data/test/`):", "", *rows, "",
+            "`python tools/test_episodes.py`, records with their provenance in `data/test/`; \"flocked\": velocity "
+            f"variance at 5 s at most {FLOCKED_VARIANCE:.0e} m²/s² and connected in {FLOCKED_CONNECTED:.0%} of the "
+            "episodes, `evaluate.flocked`):", "", *rows, "",
             "The tables below were computed on the book's earlier held-out episodes (seed "
             f"{_load('data/dagnn/dagnn_K4.json')['seed']}), on which recipes were also compared; they move to the test "
             "episodes when they are next recomputed.", ""]
