@@ -90,7 +90,7 @@ def _test_table() -> list:
                     f"{r['median_min_distance']:.3f} ({r['expert_median_min_distance']:.3f}) |")
     return [f"**On the test episodes** ({first['episodes']} episodes of seed {first['seed']}, never used for a choice; "
             "`python tools/test_episodes.py`, records with their provenance in `data/test/`; \"flocked\": velocity "
-            f"variance at 5 s at most {FLOCKED_VARIANCE:.0e} m²/s² and connected in {FLOCKED_CONNECTED:.0%} of the "
+            f"variance at 5 s at most {FLOCKED_VARIANCE:.0e}".replace("e-0", "e-") + f" m²/s² and connected in {FLOCKED_CONNECTED:.0%} of the "
             "episodes, `evaluate.flocked`):", "", *rows, "",
             "The tables below were computed on the book's earlier held-out episodes (seed "
             f"{_load('data/dagnn/dagnn_K4.json')['seed']}), on which recipes were also compared; they move to the test "
