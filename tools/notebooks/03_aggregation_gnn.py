@@ -1,7 +1,7 @@
 # %% [markdown]
 # # 03 · The aggregation GNN (DAGNN), trained by imitation with DAgger
 #
-# *Paper: section 3.2 (eqs. 7-10), "Implementation Details"; the baseline of Tolstaya et al. 2019.*
+# *Paper: section 3.2 (eqs. 6-10), "Implementation Details"; the baseline of Tolstaya et al. 2019.*
 #
 # Notebook 02 gave every drone its delayed aggregation sequence $\mathbf z_i(t)$. Now a small neural
 # network, **the same on every drone**, maps $\mathbf z_i(t)$ to an acceleration, and learns to do so
@@ -76,8 +76,17 @@ for name, col in zip(FEATURE_NAMES, X.reshape(-1, 6).T):
 #
 # ## 2. The network (eqs. 7-8)
 #
-# $\hat{\mathbf u}_i(t) = \mathrm{NN}_\Theta(\mathbf z_i(t))$: an MLP on the $KF = 24$ numbers of
-# $\mathbf z_i(t)$, two hidden layers of 64 with tanh, two outputs. Its weights do not depend on $i$ or
+# Each layer multiplies by its weights and applies a pointwise nonlinearity; the first layer reads
+# agent $i$'s row of the aggregation sequence, the last one is the action:
+#
+# $$ \mathbf z_\ell = \sigma_\ell\big(\boldsymbol\theta_\ell\, \mathbf z_{\ell-1}\big), \qquad
+#    \mathbf z_0 = \mathbf z_i(t), \qquad \mathbf u_i(t) = \mathbf z_L, \tag{7} $$
+#
+# $$ \hat{\mathbf u}_i(t) = \mathrm{NN}_\Theta\big(\mathbf z_i(t)\big), \qquad
+#    \Theta = \{\boldsymbol\theta_\ell,\ \ell = 1, \dots, L\}. \tag{8} $$
+#
+# Here $\mathrm{NN}_\Theta$ is an MLP on the $KF = 24$ numbers of
+# $\mathbf z_i(t)$, two hidden layers of 64 with tanh, two outputs (`AggregationMLP`). Its weights do not depend on $i$ or
 # on $t$: one small network for every drone, at every step, for any team size. The controller
 # wraps it: at each step it computes $\mathbf X(t)$, the GSO $\mathbf S(t)$, pushes both into its
 # delayed-exchange buffer, and saturates the network's output like the expert's.
@@ -92,7 +101,13 @@ print(DAGNNController(model, cfg))
 # ## 3. Imitation data, and where the labels live
 #
 # Imitation learning (eqs. 9-10): fly swarms, record every agent's $\mathbf z_i(t)$ with the expert's
-# action $\mathbf u_i^*(t)$ at that state, and fit $\mathrm{NN}_\Theta$ with an L1 loss. The expert's
+# action $\mathbf u_i^*(t)$ at that state (eq. 9 stacks them into $\mathbf U^*(t)$), and fit
+# $\mathrm{NN}_\Theta$ to them over the set $\mathcal T$ of recorded states:
+#
+# $$ \Theta^* = \operatorname*{argmin}_\Theta \sum_{\mathcal T} \sum_{i=1}^{N}
+#    \big\| \hat{\mathbf u}_i(t) - \mathbf u_i^*(t) \big\|. \tag{10} $$
+#
+# The paper writes the norm without naming it; the book uses the L1 norm (`imitation.fit_l1`). The expert's
 # actions are large only early in an episode: it aligns the swarm within about a second.
 
 # %%
