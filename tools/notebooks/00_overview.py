@@ -2,7 +2,8 @@
 # # 00 · VGAI, the book: a map
 #
 # This book teaches and reproduces **VGAI: End-to-End Learning of Vision-Based Decentralized
-# Controllers for Robot Swarms** (Hu, Gama, Chen, Wang, Ribeiro, Sadler, CoRL 2020), on a laptop CPU.
+# Controllers for Robot Swarms** (Hu, Gama, Chen, Wang, Ribeiro, Sadler; ICASSP 2021, on arXiv;
+# the full text the book follows is set in the CoRL 2020 template), on a laptop CPU.
 #
 # **The problem.** Fifty drones fly in a plane with random initial velocities. They must agree on a
 # common velocity (*flock*) without colliding. A **centralized expert** that knows every drone's
@@ -49,6 +50,22 @@ plt.show()
 # | $\mathrm{NN}_\Theta$ | the MLP from $\mathbf z_i(t)$ to $\mathbf u_i(t)$, the same on every agent (eqs. 7-8) | `models.AggregationMLP` |
 # | $\mathbf H_i(t)$, $\mathrm{CNN}_\Psi$ | agent $i$'s images; the CNN from them to $\mathbf x_i(t)$ (section 3.3) | `vision.camera_input`, `models.VisualCNN` |
 # | $g$, $F_m$ | the book's: frames $g$ steps apart give the CNN motion; $F_m$ of its features are odd in it | `VisionConfig.motion_gap`, `VisualCNN.motion_features` |
+#
+# ## Glossary: the book's own terms
+#
+# | term | meaning | where |
+# |---|---|---|
+# | **relative cost** | a controller's flocking cost (eq. 1) over the expert's on the same initial conditions (expert = 1.00) | 01, `evaluate.relative_cost` |
+# | **flocked** | the book's one definition: a small velocity variance late in the flight (at 5 s) and the swarm still connected | 01, `evaluate.flocked` |
+# | **validation / test episodes** | initial conditions drawn from two seeds: every choice (recipe, hyperparameter, training seed) is made on the validation episodes; the reported numbers come from the test episodes, which no choice has seen | 01, `book.VALIDATION_SEED`, `book.TEST_SEED` |
+# | **selection episodes** | the validation episodes under the name the seed choice uses | `book.SELECTION_SEED` |
+# | **repair sampling** | drawing initial positions for large teams by moving the agents that break a constraint instead of redrawing the whole swarm | 01, `FlockConfig.init_method` |
+# | **DAgger round** | fly swarms with the expert and the learner mixed, label every visited state with the expert's action, add them to the data, refit | 03, `imitation.dagger_mix` |
+# | **the learner flying alone** | a share of each DAgger round's swarms flown by the learner at every step, so its own drift is in the data | 06, `VGAITrainConfig.learner_swarms` |
+# | **prehistory** | the frames before $t = 0$, drawn from the initial velocities flown backwards, so the first motion image is not empty | 04, `VisionConfig.prehistory` |
+# | **odd motion features** | CNN features that change sign when the motion channel does, so they read zero when nothing moves | 05, 06, `VisualCNN.motion_features` |
+# | **stage 1 / 2 / 3** | the book's VGAI training: the CNN warm-started as a state estimator, the MLP fitted on its features, then both trained together by K-step BPTT | 06, `vgai_training.train_vgai` |
+# | **modular vision pilot** | the CNN trained as a state estimator feeding the DAGNN's MLP, not trained end to end: the control experiment for VGAI | 05 |
 #
 # ## The paper and this book
 #
@@ -130,8 +147,22 @@ plt.show()
 # ## References
 #
 # * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized
-#   Controllers for Robot Swarms.* CoRL 2020 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308));
-#   the authors' code: [VITA-Group/VGAI](https://github.com/VITA-Group/VGAI).
+#   Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308);
+#   the text the book follows is set in the CoRL 2020 template); the authors' code:
+#   [VITA-Group/VGAI](https://github.com/VITA-Group/VGAI). To cite it:
+#
+# ```bibtex
+# @inproceedings{hu2021vgai,
+#   title     = {{VGAI}: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms},
+#   author    = {Hu, Ting-Kuei and Gama, Fernando and Chen, Tianlong and Wang, Zhangyang and
+#                Ribeiro, Alejandro and Sadler, Brian M.},
+#   booktitle = {IEEE International Conference on Acoustics, Speech and Signal Processing (ICASSP)},
+#   year      = {2021},
+#   eprint    = {2002.02308},
+#   archivePrefix = {arXiv}
+# }
+# ```
+#
 # * Tolstaya, Gama, Paulos, Pappas, Kumar, Ribeiro. *Learning Decentralized Controllers for Robot
 #   Swarms with Graph Neural Networks.* CoRL 2019 ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527)):
 #   the expert, the local features and the DAGNN; its environment:
