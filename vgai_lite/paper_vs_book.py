@@ -34,6 +34,12 @@ def _rows() -> dict:
             f"four 90° pinhole cameras ({', '.join(CAMERAS)}) of {rc.view_height} × {rc.view_width}, "
             f"a {rc.view_height} × {rc.panorama_width} panorama with channels {' and '.join(rc.channels)}",
             "drones are discs on the horizon: few rows suffice, and depth gives distance; notebooks 04-05"),
+        "depth": (
+            "none: RGB cameras, distances only from how large and where a drone appears",
+            ("a depth channel beside the gray one, so distances are read, not inferred"
+             if "depth" in rc.channels else "none: the gray channel only, as the paper's cameras"),
+            "a help the paper's drones lack; notebook 06 trains the book's best recipe with gray only and "
+            "says what depth buys"),
         "motion": (
             "one frame per step (the CNN sees no motion within one input)",
             f"each frame paired with the one g = {vis.motion_gap} steps earlier as "
