@@ -185,7 +185,7 @@ plt.show()
 
 # %%
 prose("A controller **flocked** when, over the episodes it flew, the median velocity variance (the summand of eq. 1) "
-      "at {late:g} s, the same flights flown on past the {T:g} s of an episode, is at most {v:.0e} m²/s², velocities "
+      "at {late:g} s, the same flights flown on past the {T:g} s of an episode, is at most {v:g} m²/s², velocities "
       "that disagree by {rms:.3f} m/s RMS, less than half a body length per second; and the communication graph is "
       "still connected at {late:g} s in at least {c:.0%} of the episodes. Why {late:g} s: a late horizon shows "
       "whether the disagreement keeps shrinking, which an average over the first {T:g} s hides.",
