@@ -39,10 +39,12 @@ def _as_a_notebook_shows_it(item):
 
 
 def pytest_configure(config):
-    if os.environ.get("PYTEST_XDIST_WORKER"):
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # the worker itself, like its kernels: book.threads()
         import torch
 
-        torch.set_num_threads(1)
+        from vgai_lite.book import threads
+
+        torch.set_num_threads(threads())
 
 
 def pytest_collection_modifyitems(session, config, items):

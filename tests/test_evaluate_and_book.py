@@ -186,3 +186,16 @@ def test_flocked_reads_the_variance_at_5_s_and_the_connectivity():
     assert not flocked({**rec, "share_connected_at_end": FLOCKED_CONNECTED - 0.02})
     with pytest.raises(ValueError, match="5 s"):
         flocked({"velocity_variance_median": {"2s": 0.0}, "share_connected_at_end": 1.0, "flocking_horizon_s": 2.0})
+
+
+def test_threads_reads_its_variable_and_refuses_nonsense(monkeypatch):
+    from vgai_lite.book import THREADS_ENV, threads
+
+    monkeypatch.delenv(THREADS_ENV, raising=False)
+    assert threads() == 2
+    monkeypatch.setenv(THREADS_ENV, "1")
+    assert threads() == 1
+    for bad in ("0", "two", "-1"):
+        monkeypatch.setenv(THREADS_ENV, bad)
+        with pytest.raises(ValueError, match=THREADS_ENV):
+            threads()
