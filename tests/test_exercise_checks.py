@@ -399,3 +399,219 @@ def test_06_3_rejects_wrong_answers(kwargs, why):
 
 def test_06_3_rejects_a_loss_without_gradient():
     assert not any(passes(check_bptt_loss, lambda *a: bptt_right(*a).detach()))
+
+
+# ---------------------------------------------------------------------------------------------
+# 01.1: the potential's gradient (eq. 3)
+
+from vgai_lite.exercises import check_flocking_cost, check_local_features, check_pinhole, check_potential_gradient  # noqa: E402
+from vgai_lite.experiment_exercises import check_odd_part  # noqa: E402
+
+
+def grad_u(r_ij, rho, dtype=None, cut="norm", sign=+1.0, factor=2.0, first_power=2, log_power=2):
+    r = r_ij if dtype is None else r_ij.to(dtype)
+    d = r.norm(dim=-1, keepdim=True)
+    # U = 1/d^p - log d^q: grad = -p r / d^(p+2) - sign q r / d^2
+    g = -first_power * r / d ** (first_power + 2) - sign * log_power * r / d ** 2
+    g = g * factor / 2
+    inside = {"norm": d <= rho, "square": d ** 2 <= rho, "none": torch.ones_like(d, dtype=torch.bool)}[cut]
+    return torch.where(inside, g, torch.zeros_like(g))
+
+
+def grad_u_loop(r_ij, rho):
+    """Correct, another way: one offset at a time with Python floats."""
+    out = torch.zeros_like(r_ij)
+    for k, (x, y) in enumerate(r_ij.tolist()):
+        d2 = x * x + y * y
+        if math.sqrt(d2) <= rho:
+            w = -2 / d2 ** 2 - 2 / d2
+            out[k] = torch.tensor([w * x, w * y])
+    return out
+
+
+@pytest.mark.parametrize("answer", [grad_u, lambda r, rho: grad_u(r, rho, dtype=torch.float32), grad_u_loop],
+                         ids=["vector", "float32", "loop"])
+def test_01_1_passes_correct_answers(answer):
+    assert all(passes(check_potential_gradient, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda r, rho: grad_u(r, rho, cut="none"), "no cut-off at rho"),
+    (lambda r, rho: grad_u(r, rho, cut="square"), "||r||^2 <= rho instead of ||r|| <= rho"),
+    (lambda r, rho: -grad_u(r, rho), "gradient with respect to r_j"),
+    (lambda r, rho: grad_u(r, rho, factor=1.0), "d/dr ||r||^2 = r"),
+    (lambda r, rho: grad_u(r, rho, sign=-1.0), "+log instead of -log (the reference code's potential)"),
+    (lambda r, rho: grad_u(r, rho, log_power=1), "log ||r|| instead of log ||r||^2"),
+    (lambda r, rho: grad_u(r, rho, first_power=1), "1/||r|| instead of 1/||r||^2"),
+])
+def test_01_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_potential_gradient, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 01.2: the flocking cost (eq. 1)
+
+def cost_loop(v):
+    """Correct, another way: loops over time and swarms, in float32."""
+    v = v.float()
+    T, B, N, _ = v.shape
+    out = torch.zeros(B)
+    for b in range(B):
+        for t in range(T):
+            mean = v[t, b].mean(0)
+            out[b] += ((v[t, b] - mean) ** 2).sum() / N
+    return out
+
+
+def cost_var(v):
+    """Correct: the biased variance of each component, summed."""
+    return v.var(dim=2, unbiased=False).sum(-1).sum(0)
+
+
+@pytest.mark.parametrize("answer", [cost_loop, cost_var])
+def test_01_2_passes_correct_answers(answer):
+    assert all(passes(check_flocking_cost, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda v: v.var(dim=2).sum(-1).sum(0), "unbiased variance (N - 1)"),
+    (lambda v: v.var(dim=2, unbiased=False).sum(-1).mean(0), "mean over time"),
+    (lambda v: v.norm(dim=-1).var(dim=2, unbiased=False).sum(0), "variance of the speeds"),
+    (lambda v: ((v - v.mean(dim=(0, 2), keepdim=True)) ** 2).sum(-1).mean(2).sum(0), "mean over all times"),
+    (lambda v: (v - v.mean(2, keepdim=True)).norm(dim=-1).mean(2).sum(0), "norm not squared"),
+    (lambda v: ((v - v.mean(2, keepdim=True)) ** 2).sum(-1).sum(2).sum(0), "no 1/N"),
+])
+def test_01_2_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_flocking_cost, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 03.1: the six local features
+
+def features(r, v, R, cut="norm", power4=4, sign=1.0, self_in=False, vsign=1.0, dtype=None):
+    if dtype is not None:
+        r, v = r.to(dtype), v.to(dtype)
+    rij = r[:, None] - r[None]                       # r_i - r_j
+    d = rij.norm(dim=-1)
+    A = {"norm": d <= R, "square": d ** 2 <= R, "none": torch.ones_like(d, dtype=torch.bool)}[cut]
+    if not self_in:
+        A = A & ~torch.eye(len(r), dtype=torch.bool)
+    A = A.to(r.dtype)
+    dv = vsign * (A[..., None] * (v[:, None] - v[None])).sum(1)
+    d_ = (d + torch.diag(torch.full((len(r),), 0.0 if self_in else math.inf, dtype=d.dtype)))[..., None]
+    rep4 = sign * (A[..., None] * rij / d_ ** power4).sum(1)
+    rep2 = sign * (A[..., None] * rij / d_ ** 2).sum(1)
+    return torch.cat((dv, rep4, rep2), -1)
+
+
+def features_loop(r, v, R):
+    """Correct, another way: loops over agents and neighbours, in float32."""
+    r, v = r.float(), v.float()
+    N = len(r)
+    X = torch.zeros(N, 6)
+    for i in range(N):
+        for j in range(N):
+            rij = r[i] - r[j]
+            d = rij.norm()
+            if i != j and d <= R:
+                X[i, 0:2] += v[i] - v[j]
+                X[i, 2:4] += rij / d ** 4
+                X[i, 4:6] += rij / d ** 2
+    return X
+
+
+@pytest.mark.parametrize("answer", [features, features_loop])
+def test_03_1_passes_correct_answers(answer):
+    assert all(passes(check_local_features, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda r, v, R: features(r, v, R, cut="none"), "every agent a neighbour"),
+    (lambda r, v, R: features(r, v, R, cut="square"), "||r||^2 <= R"),
+    (lambda r, v, R: features(r, v, R, power4=3), "r/||r||^3"),
+    (lambda r, v, R: features(r, v, R, sign=-1.0), "r_j - r_i"),
+    (lambda r, v, R: features(r, v, R, vsign=-1.0), "v_j - v_i"),
+    (lambda r, v, R: features(r, v, R, self_in=True), "agent i its own neighbour"),
+])
+def test_03_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_local_features, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 04.1: the pinhole camera
+
+def pinhole(theta, d, rcfg, mirror=False, ccw=False, near_side=True, focal=None):
+    psi = ((theta - math.pi / 4) if ccw else (math.pi / 4 - theta)) % (2 * math.pi)
+    cam = min(math.floor(psi / (math.pi / 2)), 3)
+    phi = psi - cam * math.pi / 2 - math.pi / 4
+    W = rcfg.view_width
+    u = cam * W + W / 2 + (-1 if mirror else 1) * rcfg.focal * math.tan(phi)
+    f = rcfg.focal_vertical if focal is None else focal(rcfg)
+    h = 2 * f * (rcfg.body_height / 2) / (d - rcfg.body_radius if near_side else d)
+    return u, h
+
+
+def pinhole_atan2(theta, d, rcfg):
+    """Correct, another way: the bearing relative to each camera's axis with atan2, float32 tensors."""
+    axes = [-k * math.pi / 2 for k in range(4)]  # front (+x), right, back, left: clockwise
+    for cam, axis in enumerate(axes):
+        phi = -math.atan2(math.sin(theta - axis), math.cos(theta - axis))  # to the right of the axis
+        if -math.pi / 4 <= phi < math.pi / 4:
+            break
+    W = rcfg.view_width
+    u = torch.tensor(cam * W + W / 2 + rcfg.focal * math.tan(phi), dtype=torch.float64)
+    fv = (rcfg.view_height / 2) / math.tan(math.radians(rcfg.vertical_fov_deg) / 2)
+    return u, torch.tensor(fv * rcfg.body_height / (d - rcfg.body_radius))
+
+
+@pytest.mark.parametrize("answer", [pinhole, pinhole_atan2])
+def test_04_1_passes_correct_answers(answer):
+    assert all(passes(check_pinhole, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda t, d, c: pinhole(t, d, c, mirror=True), "columns run right to left"),
+    (lambda t, d, c: pinhole(t, d, c, ccw=True), "cameras counter-clockwise"),
+    (lambda t, d, c: pinhole(t, d, c, near_side=False), "centre distance, not the near side"),
+    (lambda t, d, c: pinhole(t, d, c, focal=lambda rc: rc.focal), "the horizontal focal length"),
+])
+def test_04_1_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_pinhole, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 06.2: the odd part
+
+def odd_sign_vector(f, images):
+    """Correct, another way: mirror with a per-channel sign."""
+    c = images.shape[1] // 2
+    sign = torch.cat((torch.ones(c), -torch.ones(c))).view(1, -1, 1, 1)
+    return 0.5 * (f(images) - f(images * sign))
+
+
+def odd_part(f, images, half="second"):
+    c = images.shape[1] // 2
+    m = images.clone()
+    if half == "second":
+        m[:, c:] = -m[:, c:]
+    elif half == "first":
+        m[:, :c] = -m[:, :c]
+    else:
+        m = -m
+    return (f(images) - f(m)) / 2
+
+
+@pytest.mark.parametrize("answer", [odd_part, odd_sign_vector])
+def test_06_2_passes_correct_answers(answer):
+    assert all(passes(check_odd_part, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda f, im: odd_part(f, im, half="first"), "negates the image, not the motion"),
+    (lambda f, im: odd_part(f, im, half="all"), "negates every channel"),
+    (lambda f, im: -odd_part(f, im), "sign flipped"),
+    (lambda f, im: f(im) - f(torch.cat((im[:, :im.shape[1] // 2], -im[:, im.shape[1] // 2:]), 1)), "no 1/2"),
+    (lambda f, im: (f(im) + f(torch.cat((im[:, :im.shape[1] // 2], -im[:, im.shape[1] // 2:]), 1))) / 2, "even part"),
+])
+def test_06_2_rejects_wrong_answers(answer, why):
+    assert not any(passes(check_odd_part, answer)), why
