@@ -33,12 +33,12 @@ def _own_imports(node) -> set:
 def test_results_of_the_shipped_controllers_are_the_ones_measured_before_the_refactor():
     """Relative cost on the first 3 held-out episodes, measured with the pre-refactor library
     (commit b429607): the DAGNN K-1 = 3 and last round's VGAI F = 24 (now kept as
-    experiments/vgai_F24_plain) fly exactly as they did; the VGAI F = 24 of the consensus round as
-    measured when it was shipped."""
+    experiments/vgai_F24_plain) fly exactly as they did; the VGAI F = 24 of the consensus round (now
+    experiments/vgai_F24_mixture, the recipe without the learner flying alone) as measured when it was shipped."""
     cfg = vl.FlockConfig()
     before = {"dagnn/dagnn_K4": [37.43408203125, 38.06521987915039, 42.21247482299805],
               "experiments/vgai_F24_plain": [84.70115661621094, 79.35276794433594, 81.79953002929688],
-              "vgai/vgai_F24": [67.89888000488281, 49.50733184814453, 62.51982498168945]}
+              "experiments/vgai_F24_mixture": [67.89888000488281, 49.50733184814453, 62.51982498168945]}
     expert = [33.22722244262695, 33.17874526977539, 34.48318099975586]
     for name, costs in before.items():
         res = vl.relative_cost(vl.load_controller(DATA_DIR / f"{name}.pt"), cfg, episodes=3, seed=EVAL_SEED,

@@ -43,58 +43,36 @@ def _flock(rec: dict) -> str:
     return f"{var['2s']:.1e} / {var['5s']:.1e} | {rec['share_connected_at_end']:.0%}"
 
 
-TRAINED_BESIDE = {"K2", "K3"}
-"""The book's other VGAIs that trained beside another job (one thread each, on the 2 cores): their
-recorded time is not the recipe's time alone."""
-
-TRAINED_ALONE = {"vgai_F24_seed2"}
-"""The shipped training seeds that trained alone on the 2 cores (seeds 0 and 1 trained two at a time,
-one thread each, in the session that added them): their recorded time is the recipe's time alone."""
-
-
 def _recipe(rec: dict) -> str:
-    return "" if rec["train_config"].get("motion_features") else " (last round's plain CNN)"
+    t = rec["train_config"]
+    return "" if t.get("motion_features") and t.get("learner_swarms") else " (not the book's recipe)"
 
 
-TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3", "vgai_F24": "VGAI, F = 24, K-1 = 3 (the shipped recipe)"}
+TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3 (exact features)",
+               "vgai_F24": "VGAI, F = 24, K-1 = 3 (images only; the book's recipe)",
+               "vgai_F24_mixture": "VGAI, the book's recipe without the learner flying alone (DAgger's mixture only)"}
 
-LEARNER_SEEDS = {0: "vgai_learner", 1: "vgai_learner_s1", 2: "vgai_learner_s2"}
-"""The learner-alone recipe's trainings (data/experiments/, notebook 06), by training seed."""
 
-
-def _label(name: str) -> str:
-    if name in TEST_LABELS:
-        return TEST_LABELS[name]
-    seed = {v: k for k, v in LEARNER_SEEDS.items()}.get(name)
-    if seed is None:
-        return name
-    val = {n: _load(f"data/experiments/{n}.json")["relative_cost_mean"] for n in LEARNER_SEEDS.values()
-           if (ROOT / "data" / "experiments" / f"{n}.json").is_file()}
-    chosen = f", the lowest validation cost of {len(val)} seeds" if min(val, key=val.get) == name else ""
-    return (f"VGAI, F = 24, K-1 = 3, + the learner flying alone in half the DAgger swarms (training seed {seed}"
-            f"{chosen}; `data/experiments/{name}.pt`; notebook 06)")
+def _episodes(rec: dict) -> str:
+    return f"{rec['episodes']} of seed {rec['seed']}"
 
 
 def _test_table() -> list:
-    """The headline figures on the test episodes (data/test/, tools/test_episodes.py), if any."""
-    recs = {p.stem: json.loads(p.read_text()) for p in sorted((ROOT / "data" / "test").glob("*.json"))}
-    if not recs:
-        return []
+    """The headline figures on the test episodes (data/test/, tools/test_episodes.py)."""
+    recs = {name: _load(f"data/test/{name}.json") for name in TEST_LABELS if (ROOT / "data" / "test" / f"{name}.json").is_file()}
     first = next(iter(recs.values()))
     rows = ["| controller | relative cost (95% CI) | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | "
             "flocked | episodes < 0.05 m (expert) | median closest [m] (expert) |", "|---|---|---|---|---|---|---|"]
     for name, r in recs.items():
-        rows.append(f"| {_label(name)} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
+        rows.append(f"| {TEST_LABELS[name]} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
                     f"{r['share_connected_at_end']:.0%} | {'yes' if flocked(r) else 'no'} | "
                     f"{r['share_below_0.05m']:.0%} ({r['expert_share_below_0.05m']:.0%}) | "
                     f"{r['median_min_distance']:.3f} ({r['expert_median_min_distance']:.3f}) |")
-    return [f"**On the test episodes** ({first['episodes']} episodes of seed {first['seed']}, never used for a choice; "
-            "`python tools/test_episodes.py`, records with their provenance in `data/test/`; \"flocked\": velocity "
-            f"variance at 5 s at most {FLOCKED_VARIANCE:.0e}".replace("e-0", "e-") + f" m²/s² and connected in {FLOCKED_CONNECTED:.0%} of the "
-            "episodes, `evaluate.flocked`):", "", *rows, "",
-            "The tables below were computed on the book's earlier held-out episodes (seed "
-            f"{_load('data/dagnn/dagnn_K4.json')['seed']}), on which recipes were also compared; they move to the test "
-            "episodes when they are next recomputed.", ""]
+    return [f"**The headline figures, on the test episodes** ({first['episodes']} episodes of seed {first['seed']}, never "
+            "used for a choice; `python tools/test_episodes.py`, records with their provenance in `data/test/`; "
+            "\"flocked\": velocity variance at 5 s at most "
+            f"{FLOCKED_VARIANCE:.0e}".replace("e-0", "e-") + f" m²/s² and connected in {FLOCKED_CONNECTED:.0%} of the "
+            "episodes, `evaluate.flocked`):", "", *rows, ""]
 
 
 def section() -> str:
@@ -102,72 +80,61 @@ def section() -> str:
     vgai = {n: _load(f"data/vgai/vgai_{n}.json") for n in ("F24", "F12", "F6", "K3", "K2")}
     results = _load("data/results/results.json")
     choice = _load("data/vgai/seeds/choice.json")
-    n75 = _load("data/vgai/vgai_F24_N75.json")
     seed_recs = {n: _load(f"data/vgai/seeds/{n}.json") for n in choice["candidates"]}
     mean_seeds = sum(r["relative_cost_mean"] for r in seed_recs.values()) / len(seed_recs)
-    seeds_note = (f"training seed {choice['chosen_seed']} of {len(seed_recs)}, chosen on {choice['episodes']} "
-                  f"selection episodes; mean of the {len(seed_recs)} seeds {mean_seeds:.2f}")
-    prov = results["provenance"]
-    scratch = [i for i in prov.get("invocations", []) if i["retrain"]]
-    eps = dagnn[4]["episodes"]
+    seeds_note = (f"training seed {choice['chosen_seed']} of {len(seed_recs)}, the lowest validation cost; "
+                  f"mean of the {len(seed_recs)} seeds {mean_seeds:.2f}")
+    n75 = results["tables"]["N"]["rows"]["VGAI"]["75"]
     p = PAPER
 
     def vg_minutes(rec):
-        return (rec["train_seconds"] + (rec.get("stage1_seconds") or 0.0 if rec.get("stage1_cached") else 0.0)) / 60
+        return (rec["train_seconds"] + (0.0 if rec.get("stage1_cached") else rec.get("stage1_seconds") or 0.0)) / 60
 
     local_rec = _load("data/local/local.json")
     rows = [
-        "| controller | relative cost (95% CI) | paper | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | command |",
-        "|---|---|---|---|---|---|",
-        f"| Local heuristic | {_ci(local_rec)} | {p['v_init']['Local'][3.0]:.2f} | {_flock(local_rec)} | "
+        "| controller | relative cost (95% CI) | paper | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | "
+        "episodes | command |",
+        "|---|---|---|---|---|---|---|",
+        f"| Local heuristic | {_ci(local_rec)} | {p['v_init']['Local'][3.0]:.2f} | {_flock(local_rec)} | {_episodes(local_rec)} | "
         "`python -m vgai_lite evaluate --controller local --json data/local/local.json` |",
-        f"| DAGNN, K-1 = 3 | {_ci(dagnn[4])} | {p['K']['DAGNN'][3]:.2f} | {_flock(dagnn[4])} | "
-        "`python -m vgai_lite train-dagnn dagnn_K4` |",
         *[f"| DAGNN, K-1 = {k - 1} | {_ci(dagnn[k])} | {p['K']['DAGNN'].get(k - 1, '-')} | {_flock(dagnn[k])} | "
-          f"`python -m vgai_lite train-dagnn dagnn_K{k}` |" for k in (1, 2, 3)],
-        f"| VGAI, F = 24, K-1 = 3 (images only; {seeds_note}) | {_ci(vgai['F24'])} | {p['F']['VGAI'][24]:.2f} | "
-        f"{_flock(vgai['F24'])} | `python -m vgai_lite train-vgai vgai_F24` |",
+          f"{_episodes(dagnn[k])} | `python -m vgai_lite train-dagnn dagnn_K{k}` |" for k in (4, 1, 2, 3)],
+        f"| VGAI, F = 24, K-1 = 3 ({seeds_note}) | {_ci(vgai['F24'])} | {p['F']['VGAI'][24]:.2f} | "
+        f"{_flock(vgai['F24'])} | {_episodes(vgai['F24'])} | `python -m vgai_lite train-vgai --seeds --choose` |",
         *[f"| VGAI, F = 24, training seed {c['training_seed']} | {_ci(seed_recs[n])} | | {_flock(seed_recs[n])} | "
-          f"`python -m vgai_lite train-vgai --seeds` |" for n, c in choice["candidates"].items()],
-        f"| VGAI, F = 24, flown by N' = 75 (trained on 50) | {_ci(n75)} | {p['N']['VGAI'][75]:.2f} | {_flock(n75)} | "
-        "`python -m vgai_lite evaluate --controller data/vgai/vgai_F24.pt --N 75 --episodes 50 "
-        "--json data/vgai/vgai_F24_N75.json` |",
-        *[f"| VGAI, {label}{_recipe(vgai[n])} | {_ci(vgai[n])} | {paper:.2f} | {_flock(vgai[n])} | "
+          f"{_episodes(seed_recs[n])} | `python -m vgai_lite train-vgai {n}` |" for n, c in choice["candidates"].items()],
+        *[f"| VGAI, {label}{_recipe(vgai[n])} | {_ci(vgai[n])} | {paper:.2f} | {_flock(vgai[n])} | {_episodes(vgai[n])} | "
           f"`python -m vgai_lite train-vgai vgai_{n}` |"
           for n, label, paper in (("K2", "K-1 = 1", p['K']['VGAI'][1]), ("K3", "K-1 = 2", p['K']['VGAI'][2]),
                                   ("F6", "F = 6", p['F']['VGAI'][6]), ("F12", "F = 12", p['F']['VGAI'][12]))],
+        f"| VGAI, F = 24, flown by N' = 75 (trained on 50; Table 3's cell) | {n75['relative_cost_mean']:.2f} "
+        f"({n75['ci95'][0]:.2f}-{n75['ci95'][1]:.2f}) | {p['N']['VGAI'][75]:.2f} | "
+        f"{n75['velocity_variance_median']['2s']:.1e} / {n75['velocity_variance_median']['5s']:.1e} | "
+        f"{n75['share_connected_at_end']:.0%} | {n75['episodes']} of seed {results['provenance']['reproduce_config']['seed']} | "
+        "`python -m vgai_lite reproduce --only N` |",
     ]
     d4, v24 = dagnn[4], vgai["F24"]
     text = [
         *_test_table(),
-        f"All on {eps} held-out episodes (seed {d4['seed']}) unless stated, N = 50, R = 1.5 m, v_init = 3 m/s; "
-        "relative cost = cost of eq. 1 over the centralized expert's cost on the same initial conditions.",
+        "**Each shipped model's own record** (N = 50, R = 1.5 m, v_init = 3 m/s; relative cost = cost of eq. 1 over "
+        "the centralized expert's on the same initial conditions). The VGAIs' records are their evaluations on the "
+        "validation episodes, where the choice among training seeds is made; the DAGNNs' and Local's are on the "
+        "book's earlier held-out episodes (seed 2020), on which designs were also compared, so neither is a test:",
         "",
         *rows,
         "",
         "Did it flock: the velocity variance (1/N) Σ‖v_i − v̄‖² (eq. 1's summand) at 2 s, the end of the paper's "
         "episode, and at 5 s of the same flights flown on (median over the episodes), and the share of episodes whose "
         "communication graph is still connected at 5 s."
-        + (" The rows marked \"last round's plain CNN\" were trained before the recipe of notebook 06, section 6."
+        + (" Rows marked \"not the book's recipe\" were trained before the recipe of notebook 06, section 6."
            if any(_recipe(r) for r in vgai.values()) else
-           " Every VGAI here is trained with the recipe of notebook 06, section 6."),
+           " Every VGAI here is trained with the book's recipe (notebook 06, section 6)."),
         "",
-        f"Safety on the same episodes: episodes with a pair closer than 0.05 m: DAGNN {d4['share_below_0.05m']:.0%}, "
-        f"VGAI {v24['share_below_0.05m']:.0%}, expert {d4['expert_share_below_0.05m']:.0%}; median closest approach "
-        f"DAGNN {d4['median_min_distance']:.3f} m, VGAI {v24['median_min_distance']:.3f} m, expert "
-        f"{d4['expert_median_min_distance']:.3f} m.",
-        "",
-        f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. The default "
-        "VGAI's training seeds: " + ", ".join(
-            f"seed {choice['candidates'][n]['training_seed']} {r['train_seconds'] / 60:.0f} min "
-            + ("alone" if n in TRAINED_ALONE else "beside another training (one thread each)")
-            for n, r in seed_recs.items()) + ". The other VGAIs: "
-        + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.1f} min"
-                    + (" (beside another job, one thread each)" if n in TRAINED_BESIDE else " alone")
-                    for n, r in vgai.items() if n != "F24")
-        + " (a run that reuses a cached first stage counts that stage's recorded time in its own)."
-        + (f" The from-scratch reproduction of every table (`python -m vgai_lite reproduce --retrain --seeds 1`), "
-           f"which trained last round's VGAIs, took {scratch[-1]['wall_seconds'] / 60:.0f} min." if scratch else ""),
+        f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. Every VGAI trained "
+        "beside another training, one thread each (stages 1-3, minutes): "
+        + ", ".join(f"seed {choice['candidates'][n]['training_seed']} {vg_minutes(r):.0f}" for n, r in seed_recs.items())
+        + "; " + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.0f}" for n, r in vgai.items() if n != "F24")
+        + " (a run that reuses a cached first stage counts only stages 2-3).",
         "",
         _tables(results),
         "",
@@ -181,7 +148,8 @@ def _tables(results: dict) -> str:
     prov = results["provenance"]
     rc = prov["reproduce_config"]
     last = prov["invocations"][-1]
-    text = (f"The paper's tables (notebook 07, `{last['command']}`; {rc['episodes']} held-out episodes per cell, "
+    text = (f"The paper's tables (notebook 07, `{last['command']}`; {rc['episodes']} test episodes per cell (seed "
+            f"{rc['seed']}), "
             f"{rc['episodes_large']} at N' >= 100; DAGNN rows over {rc['seeds']} training seeds, VGAI rows "
             f"{rc['vgai_seeds']} training each): its last invocation computed {last['cells_computed_now']} cells and "
             f"trained {last['models_trained_now']} models in {last['wall_seconds'] / 60:.0f} min; "
@@ -217,7 +185,11 @@ def _robustness() -> str:
     dl = robustness.find(res, "DAGNN", (("links", T["links_p"]),))
     aug = _load("data/experiments/vgai_F24_noise_augmented.json")["image_noise"][f"{T['image_noise_sigma']:g}"]
     eps = res["config"]["episodes"]
-    return (f"Robustness (notebook 08, `python -m vgai_lite reproduce --only robustness`; {eps} held-out episodes per "
+    stale = clean.get("checkpoint") != robustness._file_hash(robustness.CONTROLLERS["VGAI"])
+    return (("**Not yet recomputed for the shipped VGAI**: the sweep below flew the book's earlier VGAI (without the "
+             "learner flying alone). " if stale else "")
+            + f"Robustness (notebook 08, `python -m vgai_lite reproduce --only robustness`; {eps} episodes of seed "
+            f"{res['config']['seed']} per "
             f"cell): with {T['links_p']:.0%} of messages lost VGAI costs {_ci(links)} (clean {_ci(clean)}; Local "
             f"unperturbed {local['relative_cost_mean']:.2f}), connected at 5 s in {links['share_connected_at_end']:.0%} "
             f"of episodes; the DAGNN {_ci(dl)}. With pixel noise sigma = {T['image_noise_sigma']:g} VGAI costs "

@@ -329,7 +329,7 @@ def main(argv=None):
     p.add_argument("--choose", action="store_true",
                    help="pick vgai_F24 among the seeds on the selection episodes (data/vgai/seeds/choice.json)")
     p.add_argument("--retrain", action="store_true")
-    p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
+    p.add_argument("--episodes", type=int, default=20, help="validation episodes of each record (seed VALIDATION_SEED)")
     p.add_argument("--threads", type=int, default=2)
     p = sub.add_parser("reproduce", help="the paper's tables: train what is missing, evaluate, write data/results/")
     p.add_argument("--only", nargs="+", metavar="TABLE", help="tables to run: F K v_init R N (default all), or robustness (notebook 08's sweep)")

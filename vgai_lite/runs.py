@@ -16,12 +16,13 @@ import shutil
 from pathlib import Path
 from typing import Optional, Union
 
-from .book import DATA_DIR, EVAL_SEED, SELECTION_SEED
-from .checkpoints import is_finished_with, load_controller, load_estimator, save_estimator
+from .book import DATA_DIR, EVAL_SEED, SELECTION_SEED, VALIDATION_SEED
+from .checkpoints import is_finished_with, load_estimator, save_estimator
 from .config import FlockConfig
 from .dagnn_training import DAGNNTrainConfig, train_dagnn
 from .evaluate import relative_cost
 from .imitation import load_or_train
+from .provenance import Provenance, sha256
 from .state_estimation import estimator_quality, train_state_estimator
 from .vgai_config import PLAIN_RECIPE, VGAITrainConfig
 from .vgai_training import train_vgai
@@ -40,8 +41,8 @@ DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
 """The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name."""
 
 VGAI_SEEDS = 3
-"""Training seeds of the default VGAI the book ships (``train-vgai --seeds``; about 25 minutes apiece
-alone on two cores)."""
+"""Training seeds of the default VGAI the book ships (``train-vgai --seeds``; about 50 minutes apiece
+beside another training, one thread each)."""
 
 VGAI_SEED_RUNS: dict[str, VGAITrainConfig] = {f"vgai_F24_seed{s}": VGAITrainConfig(seed=s) for s in range(VGAI_SEEDS)}
 """Trainings of the default VGAI that differ only in the training seed, in data/vgai/seeds/: how far
@@ -54,11 +55,12 @@ in data/vgai/seeds/choice.json by ``python -m vgai_lite train-vgai --choose`` (a
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
     "vgai_F24": VGAITrainConfig(seed=VGAI_F24_SEED),  # the paper's default: F = 24, K - 1 = 3, egocentric
-    # Tables 1a and 1b, the default recipe (odd motion features, synthetic stage 1, aux loss):
-    "vgai_F6": VGAITrainConfig(F=6),     # as many features as the DAGNN's (F_m = 2)
-    "vgai_F12": VGAITrainConfig(F=12),   # F_m = 4
-    "vgai_K2": VGAITrainConfig(K=2),     # K - 1 = 1 exchange
-    "vgai_K3": VGAITrainConfig(K=3),     # K - 1 = 2 exchanges (shares K2's stage 1 through STAGE1_CACHE)
+    # Tables 1a and 1b (odd motion features, synthetic stage 1, aux loss; retrained with the learner
+    # flying alone: until then, learner_swarms=0.0):
+    "vgai_F6": VGAITrainConfig(F=6, learner_swarms=0.0),     # as many features as the DAGNN's (F_m = 2)
+    "vgai_F12": VGAITrainConfig(F=12, learner_swarms=0.0),   # F_m = 4
+    "vgai_K2": VGAITrainConfig(K=2, learner_swarms=0.0),     # K - 1 = 1 exchange
+    "vgai_K3": VGAITrainConfig(K=3, learner_swarms=0.0),     # K - 1 = 2 exchanges (stage 1 shared with vgai_F24's)
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
@@ -100,19 +102,23 @@ def _check_name(name: str, runs: dict, kind: str) -> None:
 
 
 def _book_model(name: str, runs: dict, folder: str, train, retrain: bool, episodes: int, progress: bool,
-                write_json: bool, record, **train_kwargs):
-    """Load or train data/FOLDER/NAME.pt, evaluate it; write NAME.json (with ``record(history)``) when
-    trained now or asked. Returns (controller, RelativeCost)."""
+                write_json: bool, record, seed: int = EVAL_SEED, **train_kwargs):
+    """Load or train data/FOLDER/NAME.pt, evaluate it on ``episodes`` episodes of ``seed``; write
+    NAME.json (with ``record(history)``) when trained now or asked. Returns (controller, RelativeCost)."""
     _check_name(name, runs, folder.split("/")[0].upper())
     cfg, tcfg = FlockConfig(), runs[name]
     path = DATA_DIR / folder / f"{name}.pt"
     controller, trained = load_or_train(path, cfg, tcfg, train, retrain=retrain, progress=progress, **train_kwargs)
-    result = relative_cost(controller, cfg, episodes=episodes, seed=EVAL_SEED, name=name)
+    command = f"python -m vgai_lite train-{folder.split('/')[0]} {name} --episodes {episodes}" \
+        + (" --retrain" if retrain else "")
+    with Provenance(command) as prov:
+        result = relative_cost(controller, cfg, episodes=episodes, seed=seed, name=name)
     hist = controller.meta["history"]
     if write_json or trained:
         write_evaluation(path.with_suffix(".json"), result, cfg,
                          extra={"train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),
-                                **record(hist)})
+                                **record(hist)},
+                         provenance=prov.record(checkpoint=path, seed=seed, episodes=episodes))
     return controller, result
 
 
@@ -124,17 +130,19 @@ def book_dagnn(name: str, retrain: bool = False, episodes: int = 50, progress: b
                        lambda hist: {"validation_by_round": hist["rounds"]})
 
 
-def book_vgai(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
+def book_vgai(name: str, retrain: bool = False, episodes: int = 20, progress: bool = True,
               write_json: bool = False):
-    """Load (or train, about 25 minutes) the book's VGAI ``name`` (of VGAI_RUNS, or of VGAI_SEED_RUNS
-    in data/vgai/seeds/) and evaluate it on ``episodes`` held-out episodes (seed EVAL_SEED).
-    Returns (controller, RelativeCost)."""
+    """Load (or train, about 50 minutes) the book's VGAI ``name`` (of VGAI_RUNS, or of VGAI_SEED_RUNS
+    in data/vgai/seeds/) and evaluate it on ``episodes`` validation episodes (seed VALIDATION_SEED):
+    the record beside a VGAI checkpoint is the evaluation its choice was made on (``choose_seed``);
+    the book reports its VGAIs on the test episodes (``tools/test_episodes.py``) and in the paper's
+    tables (``reproduce``). Returns (controller, RelativeCost)."""
     runs, folder = (VGAI_SEED_RUNS, "vgai/seeds") if name in VGAI_SEED_RUNS else (VGAI_RUNS, "vgai")
     return _book_model(name, runs, folder, train_vgai, retrain, episodes, progress, write_json,
                        lambda hist: {"stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
                                      "stage1_cached": hist.get("stage1_cached"),  # then not in train_seconds
                                      "validation": hist["rounds"]},
-                       stage1_cache=STAGE1_CACHE)
+                       seed=VALIDATION_SEED, stage1_cache=STAGE1_CACHE)
 
 
 def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress: bool = True):
@@ -156,28 +164,31 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
     return cnn, vision, meta
 
 
-def choose_seed(episodes: int = 20) -> dict:
-    """Pick the book's vgai_F24 among the trainings of VGAI_SEED_RUNS (``train-vgai --seeds``):
-    the lowest relative cost on ``episodes`` selection episodes (seed SELECTION_SEED; never the
-    evaluation seed); each candidate's flocking figures are in its record. Copies the chosen
-    checkpoint and its record to data/vgai/vgai_F24.pt / .json, writes data/vgai/seeds/choice.json,
-    and returns that record. VGAI_F24_SEED must then name the chosen seed."""
+def choose_seed() -> dict:
+    """Pick the book's vgai_F24 among the trainings of VGAI_SEED_RUNS (``train-vgai --seeds``): the
+    lowest relative cost on the selection episodes (seed SELECTION_SEED, never the test seed), read
+    from each seed's record (``book_vgai``'s evaluation, checked to be of that checkpoint and those
+    episodes). Copies the chosen checkpoint and its record to data/vgai/vgai_F24.pt / .json, writes
+    data/vgai/seeds/choice.json, and returns that record. VGAI_F24_SEED must then name the chosen seed."""
     cfg, candidates = FlockConfig(), {}
+    folder = DATA_DIR / "vgai"
     for name, tcfg in VGAI_SEED_RUNS.items():
-        path = DATA_DIR / "vgai" / "seeds" / f"{name}.pt"
+        path = folder / "seeds" / f"{name}.pt"
         if not is_finished_with(path, cfg, tcfg.to_dict()):
             raise FileNotFoundError(f"{path} is missing or not a finished training of {name}: "
                                     "run `python -m vgai_lite train-vgai --seeds` first")
-        controller = load_controller(path)
-        res = relative_cost(controller, cfg, episodes=episodes, seed=SELECTION_SEED, name=name,
-                            flock_times=())  # the rule reads the cost; the flocking figures are in each record
-        candidates[name] = {**res.summary(), "training_seed": tcfg.seed}  # "seed": the selection episodes
+        rec = json.loads(path.with_suffix(".json").read_text())
+        prov = rec["provenance"].get("evaluation", rec["provenance"])
+        if prov["checkpoint_sha256"] != sha256(path) or rec["seed"] != SELECTION_SEED:
+            raise ValueError(f"{path.with_suffix('.json')} is not an evaluation of {path.name} on the selection "
+                             f"episodes (seed {SELECTION_SEED}): run `python -m vgai_lite train-vgai {name}`")
+        candidates[name] = {k: rec[k] for k in ("relative_cost_mean", "relative_cost_mean_ci95", "episodes", "seed")}
+        candidates[name]["training_seed"] = tcfg.seed
     best = min(candidates, key=lambda n: candidates[n]["relative_cost_mean"])
-    folder = DATA_DIR / "vgai"
     for suffix in (".pt", ".json"):
         shutil.copyfile(folder / "seeds" / f"{best}{suffix}", folder / f"vgai_F24{suffix}")
     record = {"rule": "lowest relative cost on the selection episodes", "selection_seed": SELECTION_SEED,
-              "episodes": episodes, "chosen": best, "chosen_seed": VGAI_SEED_RUNS[best].seed,
-              "candidates": candidates}
+              "episodes": candidates[best]["episodes"], "chosen": best, "chosen_seed": VGAI_SEED_RUNS[best].seed,
+              "chosen_sha256": sha256(folder / "vgai_F24.pt"), "candidates": candidates}
     (folder / "seeds" / "choice.json").write_text(json.dumps(record, indent=1) + "\n")
     return record

@@ -21,7 +21,7 @@ OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight", "flight_s
                    "anchor_weight", "joint_early_share", "learner_swarms")
 """Fields added in the consensus round (notebook 06, section 6); a stored config without them had 0."""
 
-PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0}
+PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0, "learner_swarms": 0.0}
 """The recipe of the book's first VGAIs (the paper's plain CNN, stage 1 on expert states only, the
 action loss alone in stage 3): ``VGAITrainConfig(F=6, **PLAIN_RECIPE)``."""
 
@@ -68,8 +68,9 @@ class VGAITrainConfig:
             stages 1 and 2 (and the cached stage 1) stay as they were (hypothesis 1).
         learner_swarms: the share of each DAgger round's swarms that the learner flies alone (p = 1
             at every step), the others under the paper's mixture (p_learner): the states the
-            learner's own drifting leads to, late in a flight, labelled with the expert's braking
-            (hypothesis 1).
+            learner's own drifting leads to, late in a flight, labelled with the expert's braking.
+            Our choice: 0.5, the one change that made VGAI flock (notebook 06: three training seeds,
+            each with velocity variance at 5 s below the book's threshold; 0: the paper's mixture alone).
         mlp_on_exact: stage 2 fits the MLP on the CNN's features corrected through the aux head
             (``exact_through_aux``) so that they read as the exact local features, as the modular
             vision pilot's MLP learned its response on exact features (hypothesis 2).
@@ -106,7 +107,7 @@ class VGAITrainConfig:
     aux_weight: float = 5.0
     flight_steps: int = 0
     joint_early_share: float = 0.0
-    learner_swarms: float = 0.0
+    learner_swarms: float = 0.5
     mlp_on_exact: bool = False
     anchor_weight: float = 0.0
 

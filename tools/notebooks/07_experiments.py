@@ -20,7 +20,7 @@
 # ```
 #
 # The command reuses trained checkpoints whose configuration matches (the book's shipped DAGNNs
-# and VGAIs), evaluates every controller of a column on the same held-out initial conditions, and
+# and VGAIs), evaluates every controller of a column on the same initial conditions (the test episodes), and
 # stores each cell as soon as it is computed, so an interrupted run resumes where it stopped. This
 # notebook does **not** retrain anything; set `RERUN = True` below to run the command from here.
 #
@@ -38,7 +38,7 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, EVAL_SEED, ROOT, pick, prose
+from vgai_lite.book import DATA_DIR, ROOT, TEST_SEED, pick, prose
 from vgai_lite.graphs import adjacency
 from vgai_lite import findings
 from vgai_lite.reproduce import PAPER, TABLES, load_results
@@ -65,22 +65,22 @@ for inv in prov.get("invocations", []):
 # %% [markdown]
 # ## How the experiments are set up, and where the paper is silent
 #
-# * **Time.** The list above gives each invocation's wall time on this 2-core machine. The one
-#   marked *from scratch* (`reproduce --retrain --seeds 1`) trained every model the paper's tables
-#   need, one training seed each (the shipped checkpoints included, overwritten), and evaluated
-#   every cell, alone on the machine. The three VGAIs with F = 24 (K - 1 = 1, 2, 3) share their
-#   first training stage, which does not depend on K. Later invocations added the DAGNN's other
-#   training seeds and our extra rows, reading every cell already computed; the last one flew the
-#   book's retrained VGAIs (see *Which VGAI* below), computing their cells anew.
-# * **Same episodes for everyone.** Every cell of a column is flown from the same held-out initial
-#   conditions (seed 2020, never used in training); the relative cost of a cell is the mean of its
-#   costs over the mean of the expert's on those episodes, with a 95% bootstrap interval.
+# * **Time.** The list above gives each invocation's wall time on this 2-core machine. A run that
+#   finds the book's shipped checkpoints only evaluates; `reproduce --retrain --seeds 1` trains every
+#   model the tables need anew, one training seed each (the VGAIs with F = 24 and K - 1 = 1, 2, 3
+#   share their first training stage, which does not depend on K).
+# * **Same episodes for everyone: the test episodes.** Every cell of a column is flown from the same
+#   initial conditions, the book's test episodes (seed `TEST_SEED`, notebook 01), on which nothing
+#   was chosen; the relative cost of a cell is the mean of its costs over the mean of the expert's
+#   on those episodes, with a 95% bootstrap interval.
 # * **Episodes per cell**: 30 for $N' \le 75$ and 10 for $N' \ge 100$, where every VGAI drone renders
-#   and processes a view of all the others at every step (the shipped default VGAI was also
-#   evaluated on 50 episodes in notebook 06).
+#   and processes a view of all the others at every step. The headline figures of notebook 06
+#   (section 3) are the first 50 test episodes of the same seed, so a table's default cell and the
+#   headline differ only by the episodes they average.
 # * **Training seeds.** The DAGNN rows are trained with three seeds (a DAGNN trains in under a
 #   minute) and report the mean over seeds with its standard deviation; VGAI rows use one seed (a
-#   VGAI trains in about twenty minutes alone on this machine; each record in `data/vgai/` says how long).
+#   VGAI trains in about 50 minutes on this machine beside another training; each record in
+#   `data/vgai/` says how long), and notebook 06 shows how far three seeds of one configuration land.
 # * **Tables 2a and 2b** (initial velocity, radius): the paper does not say whether it retrains. Its
 #   section is about robustness, so the rows DAGNN and VGAI are the controllers trained at the
 #   defaults ($v_{init} = 3$, $R = 1.5$) and flown in each condition; the row *DAGNN (retrained)*
@@ -92,12 +92,9 @@ for inv in prov.get("invocations", []):
 #   ours are the paper's stated double integrators and our own renderer. Numbers need not match;
 #   the findings should.
 # * **Which VGAI.** Every VGAI row flies one of the VGAIs the book ships (F = 6, 12, 24 and
-#   K - 1 = 1, 2, 3), each trained with the recipe that makes VGAI flock (notebook 06, section 6: odd
-#   motion features, synthetic velocities, a state-estimation loss kept in joint training); the last
-#   invocation listed above flew them for every VGAI cell. Last round's plain-CNN VGAIs are kept in
-#   `data/experiments/` (the two-trainings table below compares two of their trainings). The row
-#   *VGAI (retrained)* of Table 2b, a VGAI trained at each radius (`reproduce --extras`), is not in
-#   this run: with the new recipe it needs two more VGAI trainings, each with its own first stage.
+#   K - 1 = 1, 2, 3), each trained with the book's recipe (notebook 06, section 6). The row
+#   *VGAI (retrained)* of Table 2b, a VGAI trained at each radius (`reproduce --extras`), costs two
+#   more VGAI trainings and is not in this run.
 
 # %%
 def cell(table, row, col):
@@ -306,7 +303,7 @@ if SHOW_EVERY_CELL:
 
 # %%
 cfg = FlockConfig()
-r0, v0 = sample_initial_state(cfg, pick(20, 2), torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, pick(20, 2), torch.Generator().manual_seed(TEST_SEED))
 traj = rollout(ExpertController(cfg), cfg, r0, v0)
 degree = {}
 for R in TABLES["R"]["columns"]:
@@ -363,7 +360,7 @@ assert check_variance_at(my_variance_at)
 
 # %% [markdown]
 # **The experiment.** Fly the book's controllers twice as long as the 5-s flights of the tables, on
-# held-out initial conditions, and read your variance at 2, 5 and 10 s (median over the flights).
+# the test episodes' initial conditions, and read your variance at 2, 5 and 10 s (median over the flights).
 # Which controllers keep aligning, which level off, and at what floor? Try other horizons, the
 # larger teams of Table 3, or the modular vision pilot of notebook 06 (section 6).
 
@@ -375,9 +372,9 @@ if not RESULTS.get("07.1"):
     print("The experiment runs once my_variance_at above passes its check (exercise 07.1).")
 else:
     horizon = pick(10.0, 0.3)
-    r_h, v_h = sample_initial_state(cfg, pick(10, 2), torch.Generator().manual_seed(EVAL_SEED))
+    r_h, v_h = sample_initial_state(cfg, pick(10, 2), torch.Generator().manual_seed(TEST_SEED))
     flyers = {"DAGNN": load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt"), "VGAI": load_controller(DATA_DIR / "vgai" / "vgai_F24.pt"),
-              "VGAI, plain CNN (last round)": load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt"),
+              "VGAI, the paper's recipe (plain CNN)": load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt"),
               "Local": LocalController(cfg)}
     times = [t for t in (2.0, 5.0, 10.0) if t <= horizon] or [horizon]
     rows = []
@@ -429,35 +426,12 @@ if results["tables"]["R"]["rows"].get("VGAI (retrained)"):
 display(Markdown("\n".join(lines)))
 
 # %% [markdown]
-# **Two trainings of each configuration.** Every VGAI configuration of Tables 1a-1b was trained
-# twice with the same seed and last round's plain-CNN recipe: first in an earlier version of the
-# book whose CNN ran in another memory layout (floating-point rounding differs, so the two
-# trainings diverge from the first steps), then by the from-scratch reproduction. Both evaluated on
-# the same 50 held-out episodes (`data/vgai/earlier/` and `data/experiments/vgai_*_plain.json`: the
-# book's VGAIs have since been retrained with the recipe of notebook 06, section 6, whose three
-# training seeds notebook 06 compares):
-
-# %%
-rows = []
-for name in ("vgai_F6", "vgai_F12", "vgai_F24", "vgai_K2", "vgai_K3"):
-    a = json.loads((DATA_DIR / "vgai" / "earlier" / f"{name}.json").read_text())
-    plain = DATA_DIR / "experiments" / f"{name}_plain.json"  # the second plain-CNN training, where retrained since
-    b = json.loads((plain if plain.is_file() else DATA_DIR / "vgai" / f"{name}.json").read_text())
-    assert a["train_config"] == b["train_config"] and a["episodes"] == b["episodes"] and a["seed"] == b["seed"]
-    rows.append(f"| {name} | F = {b['train_config']['F']}, K-1 = {b['train_config']['K'] - 1} | "
-                f"{a['relative_cost_mean']:.2f} ({a['relative_cost_mean_ci95'][0]:.2f}-{a['relative_cost_mean_ci95'][1]:.2f}) | "
-                f"{b['relative_cost_mean']:.2f} ({b['relative_cost_mean_ci95'][0]:.2f}-{b['relative_cost_mean_ci95'][1]:.2f}) | "
-                f"{b['relative_cost_mean'] - a['relative_cost_mean']:+.2f} |")
-display(Markdown("| run | configuration | first training | second training | difference |\n"
-                 "|---|---|---|---|---|\n" + "\n".join(rows)))
-
-# %% [markdown]
-# Absolute costs behind Table 2a's local-heuristic row (same held-out episodes):
+# Absolute costs behind Table 2a's local-heuristic row (the same test episodes):
 
 # %%
 for v in TABLES["v_init"]["columns"]:
     c_v = FlockConfig(v_init=v)
-    res = relative_cost(LocalController(c_v), c_v, episodes=pick(30, 2), seed=EVAL_SEED)
+    res = relative_cost(LocalController(c_v), c_v, episodes=pick(30, 2), seed=TEST_SEED)
     print(f"v_init = {v:g}: expert cost {res.expert_cost.mean():6.1f}, local heuristic {res.cost.mean():6.1f}, "
           f"ratio {res.mean_ratio:.2f}")
 
@@ -496,8 +470,8 @@ bullets = [
     "prints a VGAI number. Its trends in F and K are "
     + ("resolved" if findings.HOLDS in (F_trend, K_trend) else "not resolved")
     + f" by one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({falls(F_trend)}), K - 1 = 1, 2, 3 give "
-    f"{series('K', 'VGAI')} ({falls(K_trend)}); the two-trainings table above shows one configuration landing a few "
-    "tenths apart from one training to the next, as much as these differences.",
+    f"{series('K', 'VGAI')} ({falls(K_trend)}); notebook 06's three training seeds of one configuration show how far "
+    "one training lands from the next.",
     f"* **At R = 1 m, VGAI (trained at 1.5 m) costs {v1['relative_cost_mean']:.2f}**, against the DAGNN's "
     f"{d1['relative_cost_mean']:.2f} flown there and {dr1['relative_cost_mean']:.2f} retrained there, and Local's "
     f"{l1['relative_cost_mean']:.2f}. "
@@ -537,7 +511,7 @@ display(Markdown("\n".join(bullets)))
 # * **Our VGAI is cheaper than the paper's too** (the cell before; the ratio VGAI / DAGNN is in the
 #   first line of the discussion above). It must infer velocities from two rendered frames of
 #   12 × 128 pixels, with a CNN sized to train on two CPU cores; what made it flock (notebook 06,
-#   section 6) is also what made it cheaper (the two-trainings table: last round's plain CNN).
+#   section 6) also made it cheaper (its ablation starts from the paper's recipe).
 # * **The radius table.** Our rows DAGNN and VGAI are trained at $R = 1.5$ and flown at 1.0 and 2.0;
 #   the paper does not say whether it retrained, so the row *DAGNN (retrained)* trains one at each
 #   radius. The DAGNN follows the paper: a larger radius helps, flown or retrained, and retraining
@@ -557,8 +531,7 @@ display(Markdown("\n".join(bullets)))
 # * **Spread.** Differences smaller than the intervals are not evidence either way, in ours or (no
 #   spread reported) in the paper's. The DAGNN's spread over three training seeds is often larger
 #   than its interval over episodes (compare the ± with the intervals of notebook 03), and VGAI's
-#   training-to-training spread (the two-trainings table, and notebook 06's three training seeds)
-#   is larger still, so one training per cell, as for our VGAI rows and, as far as it says, the
+#   training-to-training spread (notebook 06's three training seeds) may be larger still, so one training per cell, as for our VGAI rows and, as far as it says, the
 #   paper's, understates the uncertainty.
 # * **Scaling.** With the symmetric-normalised GSO what a drone aggregates stays on the same scale
 #   as its degree grows (notebook 03 shows the un-normalised GSO failing at 100); VGAI's images do
@@ -637,7 +610,7 @@ prose("Past about {knee} machines the projection stops falling: the longest chai
 # * The row *VGAI (retrained)* of Table 2b with the new recipe (`reproduce --extras`).
 # * A steadier VGAI training: its validation cost bounces between DAgger rounds (notebook 06's
 #   curve), so a decaying learning rate or keeping the best validated round should cut the
-#   training-to-training spread that the two-trainings table shows.
+#   training-to-training spread that notebook 06's three training seeds show.
 # * The exercises of notebooks 01-07 can be graded automatically; see the README's section for
 #   instructors.
 # * [Notebook 08](08_robustness.ipynb) flies the same controllers in harsher worlds than the

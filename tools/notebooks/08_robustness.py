@@ -168,6 +168,11 @@ rc = robustness.RobustnessConfig()
 print(f"{len(results['cells'])} cells, {results['evaluation_seconds'] / 60:.0f} min of flying "
       f"({results['torch_threads']} threads); episodes per cell: {rc.episodes} (N = 50), {rc.episodes_large} (N' >= 100)")
 print(robustness.format_results(results))
+flown = robustness.find(results, "VGAI").get("checkpoint")
+if flown != robustness._file_hash(robustness.CONTROLLERS["VGAI"]):
+    display(Markdown("**Careful: this sweep flew the book's earlier VGAI** (the recipe without the learner flying "
+                     "alone, notebook 06's ablation, row 4), not the shipped `vgai_F24.pt`; its VGAI cells are "
+                     "recomputed by the command above."))
 
 # %%
 local = robustness.find(results, "Local")
