@@ -367,6 +367,16 @@ for name, traj in trajs.items():
           f"90th percentile {when.quantile(0.9).item():.0f})")
 
 # %% [markdown]
+# **How the book reports safety.** Each drone's body is a cylinder of 5 cm radius (notebook 04), so
+# two drones touch when their centres are closer than 0.1 m. The book reports, beside every cost,
+# the median over the episodes of each episode's closest approach and the share of episodes with a
+# pair closer than 0.05 m: bodies half into each other, a crash rather than a graze. The share
+# below 0.1 m (contact) is in every record too, and shown where a table has room. Since even the
+# expert comes that close in some episodes (its closest approaches are set by the initial
+# conditions, below), a controller is called **as safe as the expert** when its share below 0.05 m
+# is at most the expert's plus 4 points (or 5%, whichever is larger) and its median closest approach
+# at least 0.9 times the expert's, on the same episodes.
+#
 # In the first handful of steps, for both controllers alike: a pair that starts close and fast is
 # braked by a repulsion of thousands of m/s², saturated at 30, so the closest approach is set by the
 # initial conditions and the saturation, not by the alignment rule. A learned controller must keep
@@ -457,6 +467,12 @@ prose("""## What we have, and what comes next
 # learned controller on the same local features without any exchange already closes much of the
 # gap between Local and the expert (learning a better local rule); each exchange then closes part
 # of the rest.
+
+# %% [markdown]
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 2: the flocking problem, eq. 1's cost.
+# * Tolstaya, Gama, Paulos, Pappas, Kumar, Ribeiro. *Learning Decentralized Controllers for Robot Swarms with Graph Neural Networks.* CoRL 2019 ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527)): the expert controller and its potential (eqs. 2-3).
 
 # %% [markdown]
 # ## Your score

@@ -272,6 +272,13 @@ assert check_sym_gso(my_sym_gso)
 # shared by all agents, and trains it to imitate the expert: the paper's DAGNN baseline.
 
 # %% [markdown]
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 3.2: the delayed aggregation sequence, eq. 6.
+# * Gama, Marques, Leus, Ribeiro. *Convolutional Neural Network Architectures for Signals Supported on Graphs.* IEEE Transactions on Signal Processing, 2019 ([arXiv:1805.00165](https://arxiv.org/abs/1805.00165)): aggregation graph neural networks.
+# * Tolstaya, Gama, Paulos, Pappas, Kumar, Ribeiro. *Learning Decentralized Controllers for Robot Swarms with Graph Neural Networks.* CoRL 2019 ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527)): the delayed aggregation in a swarm.
+
+# %% [markdown]
 # ## Your score
 #
 # The checks run so far in this session, for this notebook's exercises (an instructor's grader runs

@@ -252,38 +252,52 @@ def book_dagnn(name):
     return load_or_train(DATA_DIR / "dagnn" / f"{name}.pt", cfg, DAGNN_RUNS[name], train_dagnn, progress=False)[0]
 
 
-rows = []
+rows, dagger_cells = [], []
 for name, label in (("dagnn_K4", "DAgger, p = 0.33"), ("dagnn_K4_no_dagger", "expert data only")):
     res = relative_cost(book_dagnn(name), cfg, episodes=EPISODES, seed=EVAL_SEED)
     lo, hi = res.mean_ratio_ci
+    dagger_cells.append(res.summary())
     rows.append(f"| {label} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {res.safety.share_below(0.05):.0%} |")
 display(Markdown("| training data | relative cost (95% CI) | episodes < 0.05 m |\n|---|---|---|\n" + "\n".join(rows)))
 
+# %%
+from vgai_lite import findings
+
+prose("By the book's one criterion (notebook 07, `vgai_lite/findings.py`: a cost is lower than another when their 95% "
+      "intervals do not overlap), {verdict} The DAGNN's mistakes are small, so the states it visits are not far from the "
+      "expert's; notebook 06 shows a learner whose mistakes are not small, where DAgger's data decides everything.",
+      verdict={-1: "DAgger lowers the cost here.", 0: "this budget cannot tell the two apart: the intervals overlap.",
+               1: "behaviour cloning does better here."}[findings.compare(*dagger_cells)])
+
 # %% [markdown]
-# DAgger helps, by a few hundredths: the learner's mistakes are small, so the states it visits
-# are not far from the expert's.
-#
-# ## 8. More exchanges help (Table 1b)
+# ## 8. How many exchanges (Table 1b)
 #
 # With $K-1$ exchanges an agent hears, with delay, from $K-1$ hops away. The paper's DAGNN row:
 # 1.94, 1.82, 1.70 for 1, 2, 3 exchanges. Ours, including $K-1 = 0$ (features only, no
 # communication beyond sensing):
 
 # %%
-rows, ks, costs = [], [], []
+rows, ks, costs, k_cells = [], [], [], []
 paper_k = {1: 1.94, 2: 1.82, 3: 1.70}
 for K in (1, 2, 3, 4):
     res = relative_cost(book_dagnn(f"dagnn_K{K}"), cfg, episodes=EPISODES, seed=EVAL_SEED)
     lo, hi = res.mean_ratio_ci
-    ks.append(K - 1), costs.append(res.mean_ratio)
+    ks.append(K - 1), costs.append(res.mean_ratio), k_cells.append(res.summary())
     rows.append(f"| {K - 1} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {paper_k.get(K - 1, '—')} | "
                 f"{res.safety.share_below(0.05):.0%} | {(K - 1) * 6 * 4} |")
 display(Markdown("| exchanges K-1 | DAGNN relative cost (95% CI) | paper | episodes < 0.05 m | bytes sent per agent per step |\n"
                  "|---|---|---|---|---|\n" + "\n".join(rows)))
 
+# %%
+prose("{first} {rest}",
+      first=findings.sentence("The first exchange lowers the cost (K-1 = 0 → 1)", findings.trend(k_cells[:2], -1),
+                              k_cells[:2], ks[:2]),
+      rest=findings.sentence("Each further exchange lowers it again (K-1 = 1 → 2 → 3)", findings.trend(k_cells[1:], -1),
+                             k_cells[1:], ks[1:]))
+
 # %% [markdown]
-# Each exchange lowers the cost, as in the paper, with diminishing returns: the information that
-# is missing is the velocity of agents far away, and it arrives $K-1$ steps late.
+# The information an exchange adds is the velocity of agents farther away, and it arrives $K-1$
+# steps late, so each exchange can add less than the one before.
 #
 # ## 9. The GSO, and larger teams
 #
@@ -399,14 +413,21 @@ assert check_dagger_round(my_dagger_round)
 # ## Key takeaways
 #
 # * The DAGNN: exact local features, the delayed aggregation, one MLP shared by every drone, trained by imitating the expert.
-# * DAgger matters: the learner must be shown the states its own mistakes lead to.
-# * More exchanges help; the GSO decides whether a controller trained with 50 drones works in denser teams.
+# * DAgger shows the learner the states its own mistakes lead to; for the DAGNN, whose mistakes are small, it buys little (section 7).
+# * Exchanging with neighbours helps (section 8 says by how much, exchange by exchange); the GSO decides whether a controller trained with 50 drones works in denser teams.
 # * The cost hides what happens late in a flight: judge every controller by its cost, its safety and whether it flocked.
 #
 # ## Next
 #
 # The DAGNN knows its neighbours' relative positions and velocities exactly. A drone with a camera
 # does not: [notebook 04](04_rendered_observations.ipynb) renders what each drone *sees*, and notebooks 05-06 learn to fly from that.
+
+# %% [markdown]
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 3.2: eqs. 7-10.
+# * Tolstaya, Gama, Paulos, Pappas, Kumar, Ribeiro. *Learning Decentralized Controllers for Robot Swarms with Graph Neural Networks.* CoRL 2019 ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527)): the DAGNN, its six local features.
+# * Ross, Gordon, Bagnell. *A Reduction of Imitation Learning and Structured Prediction to No-Regret Online Learning.* AISTATS 2011 ([arXiv:1011.0686](https://arxiv.org/abs/1011.0686)): DAgger.
 
 # %% [markdown]
 # ## Your score

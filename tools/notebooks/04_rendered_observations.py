@@ -35,10 +35,12 @@ from vgai_lite.book import EVAL_SEED, QUICK, pick, prose, threads
 from vgai_lite.physics import raycast_depth, rollout_pymunk
 from vgai_lite.render import (CAMERAS, RenderConfig, bearing_to_column, column_layers, egocentric_depth,
                               render_egocentric, render_topdown, with_motion)
+from vgai_lite.vision import VisionConfig
 from vgai_lite.viz import animate_views, animation_image, draw_swarm
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
-cfg, rcfg = FlockConfig(), RenderConfig()
+cfg = FlockConfig()
+rcfg = VisionConfig().render  # exactly what VGAI's CNN sees (RenderConfig()'s own default draws more rows)
 r0, v0 = sample_initial_state(cfg, pick(20, 3), torch.Generator().manual_seed(EVAL_SEED))
 print("quick mode" if QUICK else "full mode")
 print(rcfg)
@@ -337,6 +339,12 @@ assert check_pinhole(my_pinhole)
 # [Notebook 05](05_visual_state_cnn.ipynb) builds the paper's visual state estimator: a CNN with residual blocks that pools only
 # along the vertical axis, so that the bearing of every drone in these panoramas survives to its
 # last layers.
+
+# %% [markdown]
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 4: the drones' four cameras.
+# * pymunk, a 2D physics library ([pymunk.org](https://www.pymunk.org)): the reference physics and ray caster.
 
 # %% [markdown]
 # ## Your score

@@ -144,12 +144,14 @@ for name, (_, _, meta) in estimators.items():
     print(f"{name}: trained in {meta['seconds']:.0f} s")
 
 # %% [markdown]
-# The two-frame estimator is exactly stage 1 of last round's plain VGAI (the same CNN, steps, states,
-# episodes and seed), whose training recorded how long that stage took; the two times should agree
-# when both ran alone on the machine:
+# The two-frame estimator is exactly stage 1 of VGAI trained with the paper's recipe (the same CNN,
+# steps, states, episodes and seed: the first row of notebook 06's ablation), whose training
+# recorded how long that stage took; the two times should agree when both ran alone on the machine.
+# (The book's recipe changes stage 1 in two ways, synthetic relative velocities and odd motion
+# features, which notebook 06 adds and measures one at a time.)
 
 # %%
-plain_vgai = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt").meta["history"]
+plain_vgai = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt").meta["history"]  # the paper's recipe
 alone = estimators["two frames (g = 5)"][2]["seconds"]
 prose("Stage 1 inside that VGAI training took {inside:.0f} s; the shipped two-frame estimator, trained on "
       "its own, {alone:.0f} s (its 40 expert episodes flown first included). {verdict}",
@@ -368,12 +370,18 @@ else:
 # (the same convolutions, padded differently), so a switch needs only that evidence.
 #
 # * The CNN pools rows only, so every column's bearing survives to its last layers.
-# * Regressing the DAGNN's exact features (visual state estimation) shows what the CNN can see: relative positions well, relative velocities only from two frames, and poorly when they are small.
+# * Regressing the DAGNN's exact features (visual state estimation) shows what the CNN can see: relative positions well; relative velocities from the first step with two frames, and from a single frame only once the formation betrays them; small ones poorly either way.
 #
 # ## Next
 #
 # [Notebook 06](06_vgai_joint_training.ipynb) puts the CNN in front of the DAGNN's aggregation and trains both together, end to end,
 # by imitation of the expert with K-step backpropagation through time.
+
+# %% [markdown]
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 3.3 and figure 2: the CNN.
+# * He, Zhang, Ren, Sun. *Deep Residual Learning for Image Recognition.* CVPR 2016 ([arXiv:1512.03385](https://arxiv.org/abs/1512.03385)): residual blocks.
 
 # %% [markdown]
 # ## Your score

@@ -617,6 +617,12 @@ prose("Past about {knee} machines the projection stops falling: the longest chai
 #   paper's: noisy and dead cameras, lost and late messages.
 
 # %% [markdown]
+# ## References
+#
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 4: Tables 1-3.
+# * Ray, a framework for distributed Python ([docs.ray.io](https://docs.ray.io)): the sweep on several machines.
+
+# %% [markdown]
 # ## Your score
 #
 # The checks run so far in this session, for this notebook's exercises (an instructor's grader runs
