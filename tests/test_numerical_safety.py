@@ -124,10 +124,17 @@ def _random_swarms(N: int, B: int, g: torch.Generator) -> tuple[torch.Tensor, to
     return r, v
 
 
+VGAI_STARTS_PER_N = 250
+"""VGAI flies the first 250 starts of each N in the property test below (the kinds of start are drawn
+independently per swarm, so each kind is among them about 60 times)."""
+
+
 def test_property_ten_thousand_random_starts_never_make_a_nan(learned):
-    """10,000 initial conditions (N = 2, 3, 4, 6; 2,500 each) flown by the expert, Local, DAGNN and
-    VGAI (20 steps; VGAI 3, as it renders every view: its frames before t = 0, its motion input and two
-    exchanges): every state, action and cost is finite (rollout would raise at the first that is not)."""
+    """10,000 initial conditions (N = 2, 3, 4, 6; 2,500 each) flown by the expert, Local and the DAGNN
+    (20 steps), and the first 1,000 of them (250 per N, every kind of start among them) by VGAI (3 steps,
+    as it renders every view: its frames before t = 0, its motion input and two exchanges; all 10,000
+    took VGAI two minutes, most of this file's time): every state, action and cost is finite (rollout
+    would raise at the first that is not)."""
     g = torch.Generator().manual_seed(15)
     total = 0
     for N in (2, 3, 4, 6):
@@ -138,7 +145,8 @@ def test_property_ten_thousand_random_starts_never_make_a_nan(learned):
                    "DAGNN": (load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg=cfg), 20),
                    "VGAI": (load_controller(DATA_DIR / "vgai" / "vgai_F24.pt", cfg=cfg), 3)}
         for name, (controller, steps) in flights.items():
-            traj = rollout(controller, cfg, r, v, steps=steps)
+            B = VGAI_STARTS_PER_N if name == "VGAI" else len(r)
+            traj = rollout(controller, cfg, r[:B], v[:B], steps=steps)
             for label, x in (("r", traj.r), ("v", traj.v), ("u", traj.u), ("cost", traj.cost),
                              ("min_distance", traj.min_distance)):
                 assert torch.isfinite(x).all(), f"{name}, N = {N}: {label} not finite"
