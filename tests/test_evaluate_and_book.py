@@ -199,3 +199,16 @@ def test_threads_reads_its_variable_and_refuses_nonsense(monkeypatch):
         monkeypatch.setenv(THREADS_ENV, bad)
         with pytest.raises(ValueError, match=THREADS_ENV):
             threads()
+
+
+def test_as_safe_as_expert_reads_both_safety_figures_against_the_experts():
+    from vgai_lite.evaluate import as_safe_as_expert
+
+    rec = {"share_below_0.05m": 0.06, "expert_share_below_0.05m": 0.04, "median_min_distance": 0.15,
+           "expert_median_min_distance": 0.16}
+    assert as_safe_as_expert(rec)
+    assert as_safe_as_expert({**rec, "share_below_0.05m": 0.05, "expert_share_below_0.05m": 0.0})  # the floor
+    assert not as_safe_as_expert({**rec, "share_below_0.05m": 0.10})           # 6 points above the expert
+    assert not as_safe_as_expert({**rec, "median_min_distance": 0.14})         # below 0.9 of the expert's
+    with pytest.raises(ValueError, match="expert_share_below_0.05m"):
+        as_safe_as_expert({"share_below_0.05m": 0.0, "median_min_distance": 0.1, "expert_median_min_distance": 0.1})

@@ -44,6 +44,24 @@ def flocked(summary: dict) -> bool:
     return var["5s"] <= FLOCKED_VARIANCE and summary["share_connected_at_end"] >= FLOCKED_CONNECTED
 
 
+SAFE_MARGIN, SAFE_FLOOR, SAFE_CLOSEST = 0.04, 0.05, 0.9
+"""The book's definition of "as safe as the expert" (notebook 01), on the same episodes: the share of
+episodes with a pair closer than 0.05 m at most the expert's plus SAFE_MARGIN (or SAFE_FLOOR, whichever
+is larger: a few episodes of 50 are not a difference), and the median closest approach at least
+SAFE_CLOSEST times the expert's."""
+
+
+def as_safe_as_expert(summary: dict) -> bool:
+    """Whether a record (``RelativeCost.summary()`` or a table cell) is as safe as the expert on its
+    episodes: SAFE_MARGIN, SAFE_FLOOR, SAFE_CLOSEST."""
+    missing = {"share_below_0.05m", "expert_share_below_0.05m", "median_min_distance",
+               "expert_median_min_distance"} - set(summary)
+    if missing:
+        raise ValueError(f"as_safe_as_expert() needs the record's safety figures and the expert's; missing {sorted(missing)}")
+    return (summary["share_below_0.05m"] <= max(SAFE_FLOOR, summary["expert_share_below_0.05m"] + SAFE_MARGIN)
+            and summary["median_min_distance"] >= SAFE_CLOSEST * summary["expert_median_min_distance"])
+
+
 @dataclass
 class SafetyFigures:
     """Per-episode minimum pair distance (E,) and the summaries we report beside every cost."""

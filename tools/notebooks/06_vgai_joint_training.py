@@ -35,7 +35,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, QUICK, TEST_SEED, pick, prose
-from vgai_lite.evaluate import flocked
+from vgai_lite.evaluate import as_safe_as_expert, flocked
 from vgai_lite.paper import PAPER
 from vgai_lite.vgai_training import VGAITrainConfig, train_vgai
 from vgai_lite.viz import PALETTE
@@ -169,8 +169,7 @@ display(Markdown(f"{first['episodes']} test episodes (seed {first['seed']}), F =
 
 # %%
 v, d, l = test["vgai_F24"], test["dagnn_K4"], test["local"]
-safe = v["share_below_0.05m"] <= max(0.05, v["expert_share_below_0.05m"] + 0.04) and \
-    v["median_min_distance"] >= 0.9 * v["expert_median_min_distance"]
+safe = as_safe_as_expert(v)
 prose("A swarm that sees only images and talks to its neighbours lands between the exact-feature DAGNN ({dc:.2f}) and "
       "the local heuristic ({lc:.2f}) at a relative cost of {vc:.2f}, against the paper's {vp:.2f}. {flock} "
       "{safety}",

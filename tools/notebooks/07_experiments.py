@@ -39,6 +39,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, ROOT, TEST_SEED, pick, prose
+from vgai_lite.evaluate import as_safe_as_expert
 from vgai_lite.graphs import adjacency
 from vgai_lite import findings
 from vgai_lite.reproduce import PAPER, TABLES, load_results
@@ -272,7 +273,7 @@ rows = []
 for row, xs in by_row.items():
     worst = max(xs, key=lambda z: z[2]["share_below_0.05m"] - z[2]["expert_share_below_0.05m"])
     w = worst[2]
-    safe = sum(x["share_below_0.05m"] <= max(0.05, x["expert_share_below_0.05m"] + 0.04) for _, _, x in xs)
+    safe = sum(as_safe_as_expert(x) for _, _, x in xs)
     ratio = sorted(x["median_min_distance"] / x["expert_median_min_distance"] for _, _, x in xs)
     rows.append(f"| {row} | {len(xs)} | {safe} of {len(xs)} | {w['share_below_0.05m']:.0%} vs expert "
                 f"{w['expert_share_below_0.05m']:.0%} ({TABLES[worst[0]]['column']} = {worst[1]:g}) | "
@@ -280,7 +281,9 @@ for row, xs in by_row.items():
 display(Markdown("| controller | cells | cells as safe as the expert* | worst share of episodes < 0.05 m | "
                  "median closest approach / expert's, over cells | closest in any episode [m] |\n"
                  "|---|---|---|---|---|---|\n" + "\n".join(rows) +
-                 "\n\n*share of episodes with a pair closer than 0.05 m at most max(5 %, the expert's + 4 points)"))
+                 "\n\n*the book's definition (notebook 01, `evaluate.as_safe_as_expert`): a pair closer than 0.05 m in "
+                 "at most the expert's share of episodes plus 4 points (or 5 %), and a median closest approach at "
+                 "least 0.9 times the expert's"))
 
 SHOW_EVERY_CELL = False  # True: the table of every cell
 if SHOW_EVERY_CELL:

@@ -405,7 +405,8 @@ prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.
 # * Train with the perturbations the controller will meet (noise, lost messages) from the start,
 #   not as a fine-tune, and measure what it costs in the clean world.
 # * [Notebook 07](07_experiments.ipynb) has the paper's own robustness tables (initial velocity,
-#   radius, team size).
+#   radius, team size); [notebook 09](09_results_at_a_glance.ipynb) sums the book up and lists what is
+#   still open.
 #
 # **References.** Hu et al., *VGAI*, ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)), section 4;
 # Tolstaya et al., *Learning decentralized controllers for robot swarms with graph neural networks*, CoRL 2019
