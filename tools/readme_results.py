@@ -164,7 +164,7 @@ def _tables(results: dict) -> str:
                  "to the 1-thread serial run's.")
     proj = {m: projected_hours(results, ROOT / "data" / "results", m) for m in (1, 4, 16)}
     text += (" The full reproduction with 3 training seeds per VGAI row, projected from these cells' recorded times "
-             "(`vgai_lite.ray_runner.projected_hours`, notebook 07): "
+             "(`vgai_lite.ray_runner.projected_hours`, notebook 10, the appendix): "
              + ", ".join(f"{p['projected_hours']:.1f} h on {m} machine{'s' if m > 1 else ''}" for m, p in proj.items())
              + " of 2 cores.")
     return text

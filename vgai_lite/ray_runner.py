@@ -1,6 +1,6 @@
 """``reproduce --ray``: the reproduction's trainings and cells as Ray tasks, on a laptop or a cluster.
 
-Introduced in notebook 07. The plan is ``reproduce.plan``'s, unchanged; only who computes it differs.
+Introduced in notebook 10 (the appendix). The plan is ``reproduce.plan``'s, unchanged; only who computes it differs.
 
 * Every model a cell needs (and that is not ready on disk) is one **training task**, every cell one
   **cell task**; each declares ``num_cpus`` = the torch threads it runs with (``--threads``).

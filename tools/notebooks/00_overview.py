@@ -91,6 +91,7 @@ paper_vs_book.show()
 # | [**07** experiments](07_experiments.ipynb) | the paper's tables regenerated, the paper's numbers beside ours | §4 |
 # | [**08** robustness](08_robustness.ipynb) | no silent NaN; noisy and dead cameras, lost and late messages, larger teams; a cure measured | §4 and beyond |
 # | [**09** results at a glance](09_results_at_a_glance.ipynb) | every controller on the test episodes; a fair comparison with the paper; what is still open | §4-5 |
+# | [**10** appendix: Ray](10_appendix_ray.ipynb) | the reproduction as Ray tasks; the full run projected on several machines | beyond |
 #
 # Notebook 07's tables come from one command, `python -m vgai_lite reproduce` (its results ship in
 # `data/results/`).
