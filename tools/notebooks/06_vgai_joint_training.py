@@ -257,7 +257,7 @@ ax.axhline(FLOCKED_VARIANCE, color="0.3", ls="--", lw=0.8)
 ax.set_title("velocity variance over 5 s (median, 10-90% band); dotted: end of the training episodes; "
              "dashed: the flocking threshold", fontsize=9)
 plt.show()
-anim = animate_swarms({k: trajs[k] for k in ("Centralized", "VGAI", "Local")}, cfg, every=pick(25, 100), size=3.0, dpi=55)
+anim = animate_swarms({k: trajs[k] for k in ("Centralized", "VGAI", "Local")}, cfg, every=pick(25, 100), size=4.0, dpi=80)
 animation_image(anim)
 
 # %% [markdown]
