@@ -225,7 +225,7 @@ for ax in axes:
     ax.set_xlabel(r"distance $\|r_{ij}\|$ [m]")
     ax.legend()
 axes[0].set_ylim(-2, 40), axes[0].set_title(f"potential, rho = {cfg.rho} m (grey line)")
-axes[0].set_ylabel("U (dimensionless)"), axes[1].set_ylabel("acceleration [m/s²]")
+axes[0].set_ylabel("U of eq. 3"), axes[1].set_ylabel("acceleration [m/s²]")
 axes[1].set_yscale("symlog", linthresh=1), axes[1].set_ylim(bottom=0), axes[1].set_title("repulsive acceleration (> 0 pushes apart)")
 plt.tight_layout()
 plt.show()
