@@ -20,6 +20,7 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.reproduce import PAPER  # noqa: E402
+from vgai_lite.runs import training_minutes  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 README = ROOT / "README.md"
@@ -87,8 +88,7 @@ def section() -> str:
     n75 = results["tables"]["N"]["rows"]["VGAI"]["75"]
     p = PAPER
 
-    def vg_minutes(rec):
-        return (rec["train_seconds"] + (0.0 if rec.get("stage1_cached") else rec.get("stage1_seconds") or 0.0)) / 60
+    vg_minutes = training_minutes
 
     local_rec = _load("data/local/local.json")
     rows = [
@@ -134,7 +134,7 @@ def section() -> str:
         "beside another training, one thread each (stages 1-3, minutes): "
         + ", ".join(f"seed {choice['candidates'][n]['training_seed']} {vg_minutes(r):.0f}" for n, r in seed_recs.items())
         + "; " + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.0f}" for n, r in vgai.items() if n != "F24")
-        + " (a run that reuses a cached first stage counts only stages 2-3).",
+        + " (`runs.training_minutes`: a run that reused a cached first stage adds that stage's recorded time).",
         "",
         _tables(results),
         "",

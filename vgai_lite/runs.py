@@ -96,6 +96,14 @@ def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Op
     return path
 
 
+def training_minutes(record: dict) -> float:
+    """Minutes a training took, stages 1 to 3, from its record: ``train_seconds`` counts stage 1 when it
+    was trained in the same run; when it was read from the cache (``stage1_cached``), its recorded
+    ``stage1_seconds`` are added."""
+    stage1 = record.get("stage1_seconds") or 0.0 if record.get("stage1_cached") else 0.0
+    return (record["train_seconds"] + stage1) / 60
+
+
 def _check_name(name: str, runs: dict, kind: str) -> None:
     if name not in runs:
         raise ValueError(f"unknown run {name!r}; the book's {kind} runs are {sorted(runs)}")

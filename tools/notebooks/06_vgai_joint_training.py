@@ -37,6 +37,7 @@ from vgai_lite import ExpertController, FlockConfig, LocalController, load_contr
 from vgai_lite.book import DATA_DIR, QUICK, TEST_SEED, pick, prose
 from vgai_lite.evaluate import as_safe_as_expert, flocked
 from vgai_lite.paper import PAPER
+from vgai_lite.runs import training_minutes
 from vgai_lite.vgai_training import VGAITrainConfig, train_vgai
 from vgai_lite.viz import PALETTE
 
@@ -111,7 +112,8 @@ if QUICK:
 vgai = load_controller(DATA_DIR / "vgai" / "vgai_F24.pt")
 hist = vgai.meta["history"]
 print(vgai)
-print(f"trained in {hist['seconds'] / 60:.0f} min (stages 2-3) + {hist.get('stage1_seconds', 0) / 60:.0f} min (stage 1)")
+print(f"trained in {hist['seconds'] / 60:.0f} min, stage 1 {hist.get('stage1_seconds', 0) / 60:.0f} min of them"
+      + (" (read from the cache: its recorded time, not in the total)" if hist.get("stage1_cached") else ""))
 
 # %%
 fig, axes = plt.subplots(1, 3, figsize=(15, 3.6))
@@ -209,7 +211,7 @@ for F in table_F["columns"]:
     rec = json.loads((DATA_DIR / "vgai" / f"vgai_F{F}.json").read_text())  # the training's own record
     var, conn = c["velocity_variance_median"], c["share_connected_at_end"]
     flock = var["5s"] <= FLOCKED_VARIANCE and conn >= FLOCKED_CONNECTED
-    minutes = (rec["train_seconds"] + (0 if rec.get("stage1_cached") else rec.get("stage1_seconds", 0))) / 60
+    minutes = training_minutes(rec)
     rows.append(f"| {F} | **{c['relative_cost_mean']:.2f}** ({c['ci95'][0]:.2f}-{c['ci95'][1]:.2f}) | {c['paper']:.2f} | "
                 f"{var['2s']:.1e} / {var['5s']:.1e} | {conn:.0%} | {'yes' if flock else 'no'} | "
                 f"{c['median_min_distance']:.3f} | {c['share_below_0.05m']:.0%} | {minutes:.0f} |")

@@ -23,7 +23,7 @@ from vgai_lite.book import DATA_DIR, prose
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, as_safe_as_expert, flocked
 from vgai_lite.paper import PAPER
 from vgai_lite.reproduce import load_results
-from vgai_lite.runs import DAGNN_RUNS, VGAI_RUNS
+from vgai_lite.runs import DAGNN_RUNS, VGAI_RUNS, training_minutes
 
 
 def load(rel):
@@ -39,7 +39,7 @@ def load(rel):
 # %%
 dagnn_t, vgai_t = DAGNN_RUNS["dagnn_K4"], VGAI_RUNS["vgai_F24"]
 dagnn_rec, vgai_rec = load("dagnn/dagnn_K4.json"), load("vgai/vgai_F24.json")
-vgai_minutes = (vgai_rec["train_seconds"] + vgai_rec.get("stage1_seconds", 0)) / 60
+vgai_minutes = training_minutes(vgai_rec)
 ROWS = [("Centralized expert", "everyone's positions and velocities", None, 1.0, "—", "—"),
         ("Local heuristic", "its neighbours' positions and velocities", "local", PAPER["R"]["Local"][1.5], "0", "—"),
         ("DAGNN, K-1 = 3", "exact local features, neighbours' messages", "dagnn_K4", PAPER["R"]["DAGNN"][1.5],
@@ -140,8 +140,7 @@ prose("The depth channel, measured (validation episodes): with gray and depth th
 
 # %%
 choice = load("vgai/seeds/choice.json")
-seed_minutes = [(load(f"vgai/seeds/{n}.json")["train_seconds"] + load(f"vgai/seeds/{n}.json").get("stage1_seconds", 0)) / 60
-                for n in choice["candidates"]]
+seed_minutes = [training_minutes(load(f"vgai/seeds/{n}.json")) for n in choice["candidates"]]
 n75 = results["tables"]["N"]["rows"]["VGAI"]["75"]
 n75_flocked = n75["velocity_variance_median"]["5s"] <= FLOCKED_VARIANCE and n75["share_connected_at_end"] >= FLOCKED_CONNECTED
 from vgai_lite import robustness
