@@ -50,7 +50,7 @@ def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
     assert all(_shipped_path(s) is None for s in models_of(rc, "R", "DAGNN (retrained)", 1.0))
     for name in ("vgai_F6", "vgai_F12", "vgai_K2", "vgai_K3"):
         assert _shipped_path(ModelSpec("vgai", FlockConfig(), VGAI_RUNS[name])) == DATA_DIR / "vgai" / f"{name}.pt"
-    # F = 6, 12 and K - 1 = 1, 2 ship with the default recipe, which the tables' cells ask for
+    # the tables fly the VGAIs the book ships at F = 6, 12 and K - 1 = 1, 2 (runs.VGAI_RUNS), whatever their recipe
     assert [_shipped_path(models_of(rc, "F", "VGAI", F)[0]) for F in (6, 12)] == \
         [DATA_DIR / "vgai" / "vgai_F6.pt", DATA_DIR / "vgai" / "vgai_F12.pt"]
     assert [_shipped_path(models_of(rc, "K", "VGAI", k)[0]) for k in (1, 2)] == \

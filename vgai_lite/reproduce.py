@@ -46,6 +46,7 @@ from .book import DATA_DIR, ROOT, TEST_SEED
 from .config import FlockConfig
 from .dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
+from .runs import VGAI_RUNS
 from .ray_runner import run_jobs
 from .table_cells import ModelSpec, evaluate_cell, model_path
 from .vgai_config import VGAITrainConfig
@@ -122,8 +123,16 @@ def _dagnn(rc, K=4, seed=0, **cfg_changes) -> ModelSpec:
                      _name(f"dagnn_K{K}", seed, cfg_changes))
 
 
+def _book_vgai(F: int, K: int, seed: int) -> VGAITrainConfig:
+    """The configuration of the VGAI the book ships with this F, K and seed (``runs.VGAI_RUNS``), so that
+    a table flies the shipped model whatever recipe it was trained with (each cell's record names its
+    training configuration); the book's recipe for any other."""
+    shipped = [t for t in VGAI_RUNS.values() if (t.F, t.K, t.seed) == (F, K, seed)]
+    return shipped[0] if shipped else VGAITrainConfig(F=F, K=K, seed=seed)
+
+
 def _vgai(rc, F=24, K=4, seed=0, **cfg_changes) -> ModelSpec:
-    t = VGAITrainConfig(F=F, K=K, seed=seed)
+    t = VGAITrainConfig(F=F, K=K, seed=seed) if cfg_changes else _book_vgai(F, K, seed)
     return ModelSpec("vgai", _base_cfg(rc, **cfg_changes), _quick_vgai(t) if rc.quick else t,
                      _name(f"vgai_F{F}_K{K}", seed, cfg_changes))
 
@@ -232,6 +241,11 @@ def provenance(rc: ReproduceConfig, seconds: float, started: str) -> dict:
             "command": " ".join(["python -m vgai_lite"] + sys.argv[1:]) if sys.argv else None}
 
 
+def _same(stored: dict, wanted: dict) -> bool:
+    """A stored training configuration (JSON: tuples as lists) equals ``wanted`` (``to_dict``)."""
+    return json.loads(json.dumps(stored, sort_keys=True)) == json.loads(json.dumps(wanted, sort_keys=True))
+
+
 def _aggregate(records: list[dict]) -> dict:
     means = [r["relative_cost_mean"] for r in records]
     first = records[0]
@@ -246,6 +260,10 @@ def _aggregate(records: list[dict]) -> dict:
            "expert_median_min_distance": first["expert_median_min_distance"],
            "expert_share_below_0.05m": first["expert_share_below_0.05m"],
            "cells": [r["key"] for r in records]}
+    trained = [r["model"].get("train_config") for r in records if r["model"].get("kind") == "vgai"]
+    if trained:  # whether every VGAI of the cell was trained with the book's recipe (VGAITrainConfig's defaults)
+        book = [VGAITrainConfig(F=t["F"], K=t["K"], seed=t["seed"]).to_dict() for t in trained]
+        out["book_recipe"] = all(_same(t, b) for t, b in zip(trained, book))
     if all("velocity_variance_median" in r for r in records):  # did it flock: median over training seeds
         times = list(first["velocity_variance_median"])
         out["velocity_variance_median"] = {

@@ -118,11 +118,15 @@ def table_markdown(table):
             paper = f" [{x['paper']:.2f}]" if x["paper"] is not None else ""
             var = x.get("velocity_variance_median")  # did it flock: variance at 5 s, connected at 5 s
             flock = (f"<br>5 s: {var['5s']:.0e} m²/s², {x['share_connected_at_end']:.0%} connected" if var else "")
-            parts.append(f"**{x['relative_cost_mean']:.2f}**{spread}{paper}{flock}")
+            other = "†" if x.get("book_recipe") is False else ""  # a VGAI not trained with the book's recipe
+            parts.append(f"**{x['relative_cost_mean']:.2f}**{other}{spread}{paper}{flock}")
         lines.append(f"| {row} | " + " | ".join(parts) + " |")
     return (f"**{t['title']}** — ours in bold (95% CI over episodes, or ± std over training seeds), paper's in "
             "brackets; below, whether it flocked (velocity variance at 5 s, share of episodes whose graph is "
-            "connected at 5 s), where the cells carry it\n\n" + "\n".join(lines))
+            "connected at 5 s), where the cells carry it"
+            + ("; † a VGAI trained before the book's recipe (DAgger's mixture only: notebook 06, section 6, row 4), "
+               "to be retrained" if any(x.get("book_recipe") is False for r in t["rows"].values() for x in r.values())
+               else "") + "\n\n" + "\n".join(lines))
 
 
 def plot_table(ax, table):
