@@ -93,7 +93,8 @@ for inv in prov.get("invocations", []):
 #   ours are the paper's stated double integrators and our own renderer. Numbers need not match;
 #   the findings should.
 # * **Which VGAI.** Every VGAI row flies one of the VGAIs the book ships (F = 6, 12, 24 and
-#   K - 1 = 1, 2, 3), each trained with the book's recipe (notebook 06, section 6). The row
+#   K - 1 = 1, 2, 3), trained with the book's recipe (notebook 06, section 6) except where a table
+#   marks a cell †. The row
 #   *VGAI (retrained)* of Table 2b, a VGAI trained at each radius (`reproduce --extras`), costs two
 #   more VGAI trainings and is not in this run.
 
