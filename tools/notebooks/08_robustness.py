@@ -43,11 +43,11 @@ vgai = load_controller(DATA_DIR / "vgai" / "vgai_F24.pt")
 # %% [markdown]
 # ## 1. No silent NaN
 #
-# Two things made NaN in earlier versions of the library, without a word:
+# Two things can turn a flocking simulation into NaN without a word:
 #
-# * **A NaN or an infinity in a state** travelled through the expert, the features and a whole rollout
-#   and came out as a NaN cost. Now every public function that takes a state checks it, and the
-#   error names the first swarm and agent at fault; `rollout` also checks every acceleration the
+# * **A NaN or an infinity in a state** travels through the expert, the features and a whole rollout
+#   and comes out as a NaN cost. So every public function of the library that takes a state checks
+#   it, and the error names the first swarm and agent at fault; `rollout` also checks every acceleration the
 #   controller returns and every state it reaches, and stops at the step where the flight went bad.
 # * **Two agents at the same point.** Eq. 3's potential $U = 1/\|\mathbf r_{ij}\|^2 - \log\|\mathbf r_{ij}\|^2$
 #   and the DAGNN's features $\mathbf r_{ij}/\|\mathbf r_{ij}\|^4$ divide by zero there. The library
