@@ -1,7 +1,7 @@
 """vgai_lite: the helper library of the VGAI notebook book.
 
 The book reproduces Hu, Gama, Chen, Wang, Ribeiro, Sadler, "VGAI: End-to-End Learning of
-Vision-Based Decentralized Controllers for Robot Swarms" (CoRL 2020). Modules follow the paper's
+Vision-Based Decentralized Controllers for Robot Swarms" (ICASSP 2021, arXiv:2002.02308). Modules follow the paper's
 pipeline, one idea each; data flow one way, top to bottom (nothing imports a module below it in
 this list):
 

@@ -1,6 +1,6 @@
 """Every constant of the flocking problem, in one place.
 
-Introduced in notebook 01. Each field carries the paper's value (Hu et al., CoRL 2020, section 3.1
+Introduced in notebook 01. Each field carries the paper's value (Hu et al., ICASSP 2021, section 3.1
 and "Implementation Details") or, where the paper is silent or contradicts its public reference
 code, the value we chose, with the reason beside it.
 """

@@ -1,7 +1,7 @@
 # %% [markdown]
 # # 01 · Flocking: the dynamics, the expert and the local heuristic
 #
-# *Paper: Hu et al., "VGAI", CoRL 2020, section 3.1 and "Implementation Details".*
+# *Paper: Hu et al., "VGAI", ICASSP 2021, section 3.1 and "Implementation Details".*
 #
 # Everything in this book imitates one controller, the **centralized expert**, and is measured
 # against it. This notebook builds the world it acts in:
