@@ -55,12 +55,12 @@ in data/vgai/seeds/choice.json by ``python -m vgai_lite train-vgai --choose`` (a
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
     "vgai_F24": VGAITrainConfig(seed=VGAI_F24_SEED),  # the paper's default: F = 24, K - 1 = 3, egocentric
-    # Tables 1a and 1b (odd motion features, synthetic stage 1, aux loss; retrained with the learner
-    # flying alone: until then, learner_swarms=0.0):
-    "vgai_F6": VGAITrainConfig(F=6, learner_swarms=0.0),     # as many features as the DAGNN's (F_m = 2)
+    # Tables 1a and 1b, the book's recipe:
+    "vgai_F6": VGAITrainConfig(F=6),     # as many features as the DAGNN's (F_m = 2)
+    "vgai_K2": VGAITrainConfig(K=2),     # K - 1 = 1 exchange (stage 1 shared with vgai_F24's)
+    # not yet retrained with the learner flying alone (learner_swarms=0.0: DAgger's mixture only):
     "vgai_F12": VGAITrainConfig(F=12, learner_swarms=0.0),   # F_m = 4
-    "vgai_K2": VGAITrainConfig(K=2, learner_swarms=0.0),     # K - 1 = 1 exchange
-    "vgai_K3": VGAITrainConfig(K=3, learner_swarms=0.0),     # K - 1 = 2 exchanges (stage 1 shared with vgai_F24's)
+    "vgai_K3": VGAITrainConfig(K=3, learner_swarms=0.0),     # K - 1 = 2 exchanges
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
