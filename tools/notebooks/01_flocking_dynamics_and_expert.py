@@ -225,7 +225,6 @@ for ax in axes:
     ax.set_xlabel(r"distance $\|r_{ij}\|$ [m]")
     ax.legend()
 axes[0].set_ylim(-2, 40), axes[0].set_title(f"potential, rho = {cfg.rho} m (grey line)")
-axes[0].set_ylabel("U of eq. 3"), axes[1].set_ylabel("acceleration [m/s²]")
 axes[1].set_yscale("symlog", linthresh=1), axes[1].set_ylim(bottom=0), axes[1].set_title("repulsive acceleration (> 0 pushes apart)")
 plt.tight_layout()
 plt.show()
@@ -468,8 +467,7 @@ prose("""## What we have, and what comes next
 # learned controller on the same local features without any exchange already closes much of the
 # gap between Local and the expert (learning a better local rule); each exchange then closes part
 # of the rest.
-
-# %% [markdown]
+#
 # ## References
 #
 # * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 2: the flocking problem, eq. 1's cost.

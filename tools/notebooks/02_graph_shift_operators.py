@@ -270,8 +270,7 @@ assert check_sym_gso(my_sym_gso)
 #
 # [Notebook 03](03_aggregation_gnn.ipynb) feeds $\mathbf z_i(t)$, built from six exact local features, to a small neural network
 # shared by all agents, and trains it to imitate the expert: the paper's DAGNN baseline.
-
-# %% [markdown]
+#
 # ## References
 #
 # * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 3.2: the delayed aggregation sequence, eq. 6.

@@ -151,7 +151,7 @@ for name, (_, _, meta) in estimators.items():
 # features, which notebook 06 adds and measures one at a time.)
 
 # %%
-plain_vgai = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt").meta["history"]  # the paper's recipe
+plain_vgai = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt").meta["history"]
 alone = estimators["two frames (g = 5)"][2]["seconds"]
 prose("Stage 1 inside that VGAI training took {inside:.0f} s; the shipped two-frame estimator, trained on "
       "its own, {alone:.0f} s (its 40 expert episodes flown first included). {verdict}",
@@ -382,8 +382,7 @@ else:
 #
 # * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 3.3 and figure 2: the CNN.
 # * He, Zhang, Ren, Sun. *Deep Residual Learning for Image Recognition.* CVPR 2016 ([arXiv:1512.03385](https://arxiv.org/abs/1512.03385)): residual blocks.
-
-# %% [markdown]
+#
 # ## Your score
 #
 # The checks run so far in this session, for this notebook's exercises (an instructor's grader runs

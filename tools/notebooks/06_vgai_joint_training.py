@@ -204,7 +204,12 @@ prose("A swarm that sees only images and talks to its neighbours lands between t
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE
 from vgai_lite.reproduce import load_results
 
-table_F = load_results()["tables"]["F"]
+results = load_results()
+table_F = results["tables"]["F"]
+tables_seed = results["provenance"]["reproduce_config"]["seed"]
+if tables_seed != TEST_SEED:
+    display(Markdown(f"**Careful: this table is not yet on the test episodes**: computed on seed {tables_seed} with the "
+                     "VGAIs shipped before the book's recipe (section 6, row 4); notebook 07 says how to recompute it."))
 rows, cells = [], {}
 for F in table_F["columns"]:
     c = cells[F] = table_F["rows"]["VGAI"][str(F)]
@@ -215,7 +220,7 @@ for F in table_F["columns"]:
     rows.append(f"| {F}{'' if c.get('book_recipe', True) else ' †'} | **{c['relative_cost_mean']:.2f}** ({c['ci95'][0]:.2f}-{c['ci95'][1]:.2f}) | {c['paper']:.2f} | "
                 f"{var['2s']:.1e} / {var['5s']:.1e} | {conn:.0%} | {'yes' if flock else 'no'} | "
                 f"{c['median_min_distance']:.3f} | {c['share_below_0.05m']:.0%} | {minutes:.0f} |")
-display(Markdown(f"| F | VGAI relative cost (95% CI), {c['episodes']} test episodes | paper | velocity variance 2 s / 5 s [m²/s²] | "
+display(Markdown(f"| F | VGAI relative cost (95% CI), {c['episodes']} episodes of seed {tables_seed} | paper | velocity variance 2 s / 5 s [m²/s²] | "
                  "connected at 5 s | flocked | median closest approach [m] | episodes < 0.05 m | training [min] |\n"
                  "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
                  + ("\n\n† trained before the book's recipe (without the learner flying alone: section 6, row 4), "

@@ -57,6 +57,11 @@ cs = prov["compute_seconds"]
 print(f"results assembled {prov['started']} at commit {(prov['git_commit'] or '?')[:10]}: {cs['cells']} cells, "
       f"{cs['cells_computed_now']} computed by that invocation, the others read back from data/results/cells/")
 print("settings:", prov["reproduce_config"])
+if prov["reproduce_config"]["seed"] != TEST_SEED:
+    display(Markdown(f"**Careful: these tables are not yet on the test episodes.** They were computed on seed "
+                     f"{prov['reproduce_config']['seed']}, the book's earlier held-out episodes, with the VGAIs shipped "
+                     "before the learner-alone recipe (notebook 06, section 6, row 4); `python -m vgai_lite reproduce` "
+                     f"recomputes them on the test episodes (seed {TEST_SEED}) with the VGAIs shipped now."))
 print("\nthe invocations of the command that computed these results (newest last):")
 for inv in prov.get("invocations", []):
     print(f"  {inv['started']}  {inv['command']}\n      {inv['wall_seconds'] / 60:5.1f} min wall, "
@@ -70,9 +75,9 @@ for inv in prov.get("invocations", []):
 #   finds the book's shipped checkpoints only evaluates; `reproduce --retrain --seeds 1` trains every
 #   model the tables need anew, one training seed each (the VGAIs with F = 24 and K - 1 = 1, 2, 3
 #   share their first training stage, which does not depend on K).
-# * **Same episodes for everyone: the test episodes.** Every cell of a column is flown from the same
-#   initial conditions, the book's test episodes (seed `TEST_SEED`, notebook 01), on which nothing
-#   was chosen; the relative cost of a cell is the mean of its costs over the mean of the expert's
+# * **Same episodes for everyone.** Every cell of a column is flown from the same initial
+#   conditions: by default the book's test episodes (seed `TEST_SEED`, notebook 01), on which nothing
+#   was chosen (the settings above name the seed of this run); the relative cost of a cell is the mean of its costs over the mean of the expert's
 #   on those episodes, with a 95% bootstrap interval.
 # * **Episodes per cell**: 30 for $N' \le 75$ and 10 for $N' \ge 100$, where every VGAI drone renders
 #   and processes a view of all the others at every step. The headline figures of notebook 06
