@@ -216,10 +216,12 @@ for F in table_F["columns"]:
     rec = json.loads((DATA_DIR / "vgai" / f"vgai_F{F}.json").read_text())  # the training's own record
     var, conn = c["velocity_variance_median"], c["share_connected_at_end"]
     flock = var["5s"] <= FLOCKED_VARIANCE and conn >= FLOCKED_CONNECTED
-    minutes = training_minutes(rec)
+    flown = json.loads((DATA_DIR / "results" / "cells" / f"{c['cells'][0]}.json").read_text())["model"]["train_config"]
+    same = json.dumps(flown, sort_keys=True) == json.dumps(rec["train_config"], sort_keys=True)
+    minutes = training_minutes(rec) if same else float("nan")  # the record is of another training than the cell's
     rows.append(f"| {F}{'' if c.get('book_recipe', True) else ' †'} | **{c['relative_cost_mean']:.2f}** ({c['ci95'][0]:.2f}-{c['ci95'][1]:.2f}) | {c['paper']:.2f} | "
                 f"{var['2s']:.1e} / {var['5s']:.1e} | {conn:.0%} | {'yes' if flock else 'no'} | "
-                f"{c['median_min_distance']:.3f} | {c['share_below_0.05m']:.0%} | {minutes:.0f} |")
+                f"{c['median_min_distance']:.3f} | {c['share_below_0.05m']:.0%} | {'—' if minutes != minutes else f'{minutes:.0f}'} |")
 display(Markdown(f"| F | VGAI relative cost (95% CI), {c['episodes']} episodes of seed {tables_seed} | paper | velocity variance 2 s / 5 s [m²/s²] | "
                  "connected at 5 s | flocked | median closest approach [m] | episodes < 0.05 m | training [min] |\n"
                  "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
