@@ -241,11 +241,6 @@ def provenance(rc: ReproduceConfig, seconds: float, started: str) -> dict:
             "command": " ".join(["python -m vgai_lite"] + sys.argv[1:]) if sys.argv else None}
 
 
-def _same(stored: dict, wanted: dict) -> bool:
-    """A stored training configuration (JSON: tuples as lists) equals ``wanted`` (``to_dict``)."""
-    return json.loads(json.dumps(stored, sort_keys=True)) == json.loads(json.dumps(wanted, sort_keys=True))
-
-
 def _aggregate(records: list[dict]) -> dict:
     means = [r["relative_cost_mean"] for r in records]
     first = records[0]
@@ -263,7 +258,8 @@ def _aggregate(records: list[dict]) -> dict:
     trained = [r["model"].get("train_config") for r in records if r["model"].get("kind") == "vgai"]
     if trained:  # whether every VGAI of the cell was trained with the book's recipe (VGAITrainConfig's defaults)
         book = [VGAITrainConfig(F=t["F"], K=t["K"], seed=t["seed"]).to_dict() for t in trained]
-        out["book_recipe"] = all(_same(t, b) for t, b in zip(trained, book))
+        out["book_recipe"] = all(json.dumps(t, sort_keys=True) == json.dumps(b, sort_keys=True)  # tuples as lists
+                                 for t, b in zip(trained, book))
     if all("velocity_variance_median" in r for r in records):  # did it flock: median over training seeds
         times = list(first["velocity_variance_median"])
         out["velocity_variance_median"] = {
