@@ -114,7 +114,9 @@ def test_a_reader_sees_equations_figures_and_the_way_on(site, chapter):
     assert state["mathErrors"] == 0, f"{chapter}: MathJax reports an error in an equation"
     if chapter[:2] in ("01", "02", "03", "05", "06"):
         assert state["maths"] > 0, f"{chapter}: no equation found on a chapter that has them"
-    assert state["images"] > 0 and state["loaded"] == state["images"], \
+    if chapter[:2] not in ("09", "10"):  # the closing chapter and the appendix are tables and prose only
+        assert state["images"] > 0, f"{chapter}: no figure found on a chapter that has them"
+    assert state["loaded"] == state["images"], \
         f"{chapter}: {state['loaded']} of {state['images']} images loaded"
     errors = tools.errors()
     assert not errors, f"{chapter}: the browser logged errors: {errors[:5]}"
