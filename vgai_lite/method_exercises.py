@@ -358,6 +358,14 @@ def check_bptt_loss(student_fn: Callable) -> CheckResult:
         if grad is None or grad[:, 0].abs().sum() == 0:
             return False, ("no gradient reaches the CNN at the window's first step: the loss must backpropagate "
                            "through all K passes of the CNN (do not detach the earlier steps' features).")
+        # the gradient at every step and agent: a loss whose value is right by chance (e.g. S(t)^k in place of
+        # S(t) S(t-1) ... whose effect on one number can be tiny) still routes each step's features wrongly
+        images_r = images.clone().requires_grad_(True)
+        (want_grad,) = torch.autograd.grad(_reference_bptt(cnn, mlp, images_r, S, u_star), images_r)
+        if not torch.allclose(grad.to(want_grad.dtype), want_grad, rtol=1e-3, atol=1e-3 * want_grad.abs().max().item()):
+            return False, ("the loss's gradient with respect to the inputs is not eq. 10's: step t - k's features "
+                           "reach the last step through S(t) S(t-1) ... S(t-k+1), the GSOs of the steps between "
+                           "(eq. 6), not through S(t)^k.")
         return True, f"the L1 loss at the window's last step, with gradients through all K = {K} CNN passes."
 
     return _run("06.3", body)
