@@ -11,10 +11,10 @@ import nbformat
 import pytest
 
 from vgai_lite.book import ROOT
-from vgai_lite.course import (grade_notebook, is_score_cell, make_student_copies, report_name, strip_solutions,
+from vgai_lite.lab.course import (grade_notebook, is_score_cell, make_student_copies, report_name, strip_solutions,
                               student_copy)
-from vgai_lite.exercises import EXERCISES, exercises_of, score
-from vgai_lite.method_exercises import check_dagger_mix
+from vgai_lite.lab.exercises import EXERCISES, exercises_of, score
+from vgai_lite.lab.method_exercises import check_dagger_mix
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 GRADED = [p for p in NOTEBOOKS if exercises_of(p.name[:2])]
@@ -120,7 +120,7 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     def probe(state, points):
         ids = exercises_of("02")
         nb = nbformat.v4.new_notebook()
-        cell = nbformat.v4.new_code_cell('from vgai_lite.exercises import score\n\nscore("02");', execution_count=1)
+        cell = nbformat.v4.new_code_cell('from vgai_lite.lab.exercises import score\n\nscore("02");', execution_count=1)
         listing = "".join(f"  {k} {EXERCISES[k]:45s} {state}\n" for k in ids)
         cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=(
             f"{listing}Score for notebook 02: {points}/{len(ids)}\n"))]

@@ -18,7 +18,7 @@ import torch
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, ROOT
 from vgai_lite.flocking import flocking_cost
-from vgai_lite.provenance import Provenance, sha256
+from vgai_lite.lab.provenance import Provenance, sha256
 
 RULES = {"Local": LocalController, "local": LocalController}
 """Records of controllers that are rules (no checkpoint), by the name a record gives them."""

@@ -9,9 +9,9 @@ import pytest
 
 from vgai_lite.book import DATA_DIR
 from vgai_lite.config import FlockConfig
-from vgai_lite.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEEDS
-from vgai_lite.table_cells import ModelSpec, _shipped_path
-from vgai_lite.reproduce import (PAPER, TABLES, ReproduceConfig, flight_config, models_of, plan,
+from vgai_lite.lab.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEEDS
+from vgai_lite.lab.table_cells import ModelSpec, _shipped_path
+from vgai_lite.lab.reproduce import (PAPER, TABLES, ReproduceConfig, flight_config, models_of, plan,
                                  run)
 
 
@@ -129,7 +129,7 @@ def test_the_plain_cnn_records_of_retrained_configurations_are_kept():
     """Every configuration retrained with the default recipe keeps its plain-CNN record (notebooks 06-07)."""
     import json
 
-    from vgai_lite.runs import PLAIN_RUNS
+    from vgai_lite.lab.runs import PLAIN_RUNS
     from vgai_lite.vgai_config import VGAITrainConfig
 
     assert "vgai_F24_plain" in PLAIN_RUNS

@@ -257,7 +257,7 @@ def test_the_default_vgai_is_the_training_seed_the_selection_chose():
     import json
 
     from vgai_lite.book import DATA_DIR, EVAL_SEED
-    from vgai_lite.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEED_RUNS
+    from vgai_lite.lab.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEED_RUNS
 
     choice = json.loads((DATA_DIR / "vgai" / "seeds" / "choice.json").read_text())
     assert choice["selection_seed"] != EVAL_SEED and set(choice["candidates"]) == set(VGAI_SEED_RUNS)

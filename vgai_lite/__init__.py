@@ -1,26 +1,29 @@
-"""vgai_lite: the helper library of the VGAI notebook book.
+"""vgai_lite: the method of the VGAI notebook book, in the order of the paper.
 
 The book reproduces Hu, Gama, Chen, Wang, Ribeiro, Sadler, "VGAI: End-to-End Learning of
-Vision-Based Decentralized Controllers for Robot Swarms" (ICASSP 2021, arXiv:2002.02308). Modules follow the paper's
-pipeline, one idea each; data flow one way, top to bottom (nothing imports a module below it in
-this list):
+Vision-Based Decentralized Controllers for Robot Swarms" (ICASSP 2021, arXiv:2002.02308). One module
+per idea; data flow one way: a module imports only modules listed before it here
+(tests/test_architecture.py checks that this list is complete and in that order):
 
-  the problem      ``config`` (constants), ``flocking`` (dynamics, initial conditions, cost eq. 1,
-                   rollouts), ``controllers`` (expert eqs. 2-3, local heuristic)
-  communication    ``graphs`` (who hears whom, S(t)), ``consensus`` (did it flock: velocity
-                   variance late in a flight, cohesion), ``evaluate`` (relative cost, close calls
-                   and the flocking figures beside it), ``features`` (the DAGNN's 6 exact local
-                   features), ``aggregation`` (Z(t), eq. 6)
-  what drones see  ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference),
-                   ``vision`` (the CNN's input: frames, motion, one image pipeline)
-  learning         ``models`` (the networks: AggregationMLP eqs. 7-8, VisualCNN), ``learned_controllers``
-                   (DAGNNController, VGAIController), ``checkpoints`` (files), ``imitation`` (DAgger,
-                   what both trainings share), ``dagnn_training``, ``vgai_config`` (what defines a VGAI
-                   run), ``state_estimation`` (stage 1: the CNN taught the local features),
-                   ``vgai_training`` (three stages, K-step BPTT), ``runs`` (the book's shipped models by name)
-  the paper's tables  ``paper`` (its numbers), ``table_cells``, ``reproduce``
-  the book         ``book`` (quick mode, data paths, seeds), ``viz``, ``viz3d``, ``exercises``,
-                   ``course``, ``benchmark``
+  the book's ground  ``book`` (quick mode, data paths, the seeds), ``config`` (constants, FlockConfig)
+  the problem        ``flocking`` (dynamics, initial conditions, cost eq. 1, rollouts), ``controllers``
+                     (expert eqs. 2-3, local heuristic)
+  communication      ``graphs`` (who hears whom, S(t)), ``consensus`` (did it flock: velocity variance
+                     late in a flight, cohesion), ``evaluate`` (relative cost, close calls and the
+                     flocking figures beside it), ``features`` (the DAGNN's 6 exact local features),
+                     ``aggregation`` (Z(t), eq. 6)
+  what drones see    ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference), ``vision``
+                     (the CNN's input: frames, motion, one image pipeline)
+  learning           ``models`` (AggregationMLP eqs. 7-8, VisualCNN), ``learned_controllers``
+                     (DAGNNController, VGAIController), ``checkpoints`` (files), ``imitation`` (DAgger,
+                     what both trainings share), ``dagnn_training``, ``vgai_config`` (what defines a
+                     VGAI run), ``state_estimation`` (stage 1: the CNN taught the local features),
+                     ``vgai_training`` (three stages, K-step BPTT)
+  pictures           ``viz``, ``viz3d``, ``diagrams``
+
+The reproduction and the book's tooling live in ``vgai_lite.lab`` (the paper's tables, the shipped
+models by name, the robustness sweep, Ray, exercises and grading, the website, benchmarks, records);
+they import the method, never the other way round.
 
 ``import vgai_lite as vl`` gives every name the notebooks teach (``vl.rollout``, ``vl.gso``,
 ``vl.render_egocentric``, ``vl.VGAIController``, ``vl.train_vgai``, ``vl.load_controller``, ...).
@@ -42,7 +45,6 @@ from .imitation import dagger_mix, fly_dagger, load_or_train
 from .learned_controllers import DAGNNController, VGAIController
 from .models import AggregationMLP, VGAIModel, VisualCNN
 from .render import RenderConfig, render_egocentric, render_topdown
-from .runs import book_dagnn, book_estimator, book_vgai
 from .state_estimation import train_state_estimator
 from .vgai_config import VGAITrainConfig
 from .vgai_training import bptt_loss, train_vgai
@@ -59,6 +61,6 @@ __all__ = [
     "camera_input", "AggregationMLP", "VisualCNN", "VGAIModel", "DAGNNController", "VGAIController",
     "save_controller", "load_controller", "load_estimator", "dagger_mix", "fly_dagger", "load_or_train",
     "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "train_vgai", "bptt_loss",
-    "train_state_estimator", "book_dagnn", "book_vgai", "book_estimator", "consensus", "Consensus",
+    "train_state_estimator", "consensus", "Consensus",
     "velocity_variance",
 ]

@@ -109,8 +109,7 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
         raise ValueError(f"batch must be a positive integer, got {batch!r}")
     if generator is None:
         generator = torch.Generator().manual_seed(0)
-    N, R2 = cfg.N, cfg.R ** 2
-    dmin2 = cfg.min_init_distance ** 2
+    N, R2, dmin2 = cfg.N, cfg.R ** 2, cfg.min_init_distance ** 2
     rs, vs = [], []
     accepted = tried = 0
     while accepted < batch:
@@ -145,9 +144,7 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
             rs.append(good)
             vs.append(vel + bias)
             accepted += k
-    r = torch.cat(rs).to(dtype=dtype, device=device)
-    v = torch.cat(vs).to(dtype=dtype, device=device)
-    return r, v
+    return torch.cat(rs).to(dtype=dtype, device=device), torch.cat(vs).to(dtype=dtype, device=device)
 
 
 def _disc(cfg: FlockConfig, count: int, generator: torch.Generator) -> torch.Tensor:

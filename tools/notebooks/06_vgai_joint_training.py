@@ -36,8 +36,8 @@ from IPython.display import Markdown, display
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, QUICK, TEST_SEED, pick, prose
 from vgai_lite.evaluate import as_safe_as_expert, flocked
-from vgai_lite.paper import PAPER
-from vgai_lite.runs import training_minutes
+from vgai_lite.lab.paper import PAPER
+from vgai_lite.lab.runs import training_minutes
 from vgai_lite.vgai_training import VGAITrainConfig, train_vgai
 from vgai_lite.viz import PALETTE
 
@@ -202,7 +202,7 @@ prose("A swarm that sees only images and talks to its neighbours lands between t
 
 # %%
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE
-from vgai_lite.reproduce import load_results
+from vgai_lite.lab.reproduce import load_results
 
 results = load_results()
 table_F = results["tables"]["F"]
@@ -230,12 +230,12 @@ display(Markdown(f"| F | VGAI relative cost (95% CI), {c['episodes']} episodes o
 
 # %% [markdown]
 # The paper finds that VGAI improves with $F$ and that even $F = 6$, as many numbers as the DAGNN's
-# exact features, flocks. The book states every such finding by one criterion (`vgai_lite/findings.py`):
+# exact features, flocks. The book states every such finding by one criterion (`vgai_lite/lab/findings.py`):
 # a cost is lower than another when their 95 % intervals do not overlap, and a trend holds when
 # every step of it is such a difference. By that criterion:
 
 # %%
-from vgai_lite import findings
+from vgai_lite.lab import findings
 
 recs_F = [{"relative_cost_mean": c["relative_cost_mean"], "relative_cost_mean_ci95": c["ci95"]} for c in cells.values()]
 prose("{claim}{caveat}", claim=findings.sentence("VGAI's cost falls as F grows (F = 6 → 12 → 24)",
@@ -497,7 +497,7 @@ def my_dagger_mix(u_learner, u_expert, p, generator):
     ### END SOLUTION
 
 # %% [check ex06-1]
-from vgai_lite.method_exercises import check_dagger_mix
+from vgai_lite.lab.method_exercises import check_dagger_mix
 
 assert check_dagger_mix(my_dagger_mix)
 
@@ -531,7 +531,7 @@ def my_bptt_loss(cnn, mlp, images, S, u_star):
     ### END SOLUTION
 
 # %% [check ex06-3]
-from vgai_lite.method_exercises import check_bptt_loss
+from vgai_lite.lab.method_exercises import check_bptt_loss
 
 assert check_bptt_loss(my_bptt_loss)
 
@@ -553,7 +553,7 @@ def my_odd_part(f, images):
     ### END SOLUTION
 
 # %% [check ex06-2]
-from vgai_lite.experiment_exercises import check_odd_part
+from vgai_lite.lab.experiment_exercises import check_odd_part
 
 assert check_odd_part(my_odd_part)
 
@@ -569,7 +569,7 @@ assert check_odd_part(my_odd_part)
 from vgai_lite.checkpoints import load_estimator
 from vgai_lite.features import local_features
 from vgai_lite.vision import stored_images
-from vgai_lite.exercises import RESULTS
+from vgai_lite.lab.exercises import RESULTS
 
 if not RESULTS.get("06.2"):
     print("The experiment runs once my_odd_part above passes its check (exercise 06.2).")
@@ -639,6 +639,6 @@ else:
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("06");

@@ -13,17 +13,17 @@ import time
 import numpy as np
 import torch
 
-from .config import FlockConfig
-from .controllers import expert_control
-from .evaluate import relative_cost
-from .flocking import sample_initial_state, step
-from .imitation import EpisodeStore
-from .learned_controllers import VGAIController
-from .physics import raycast_depth
-from .render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
-from .state_estimation import fit_state_estimator
-from .vgai_config import VGAITrainConfig
-from .vgai_training import bptt_loss
+from ..config import FlockConfig
+from ..controllers import expert_control
+from ..evaluate import relative_cost
+from ..flocking import sample_initial_state, step
+from ..imitation import EpisodeStore
+from ..learned_controllers import VGAIController
+from ..physics import raycast_depth
+from ..render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
+from ..state_estimation import fit_state_estimator
+from ..vgai_config import VGAITrainConfig
+from ..vgai_training import bptt_loss
 
 
 def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:

@@ -24,11 +24,11 @@ from typing import Optional, Union
 import torch
 from tqdm.auto import tqdm
 
-from .book import DATA_DIR, EVAL_SEED
-from .checkpoints import config_hash, load_controller
-from .config import FlockConfig
-from .controllers import LocalController
-from .evaluate import FLOCK_TIMES, relative_cost
+from ..book import DATA_DIR, EVAL_SEED
+from ..checkpoints import config_hash, load_controller
+from ..config import FlockConfig
+from ..controllers import LocalController
+from ..evaluate import FLOCK_TIMES, relative_cost
 from .perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
                             perturbed)
 

@@ -42,14 +42,14 @@ from typing import Optional, Union
 import torch
 from tqdm.auto import tqdm
 
-from .book import DATA_DIR, ROOT, TEST_SEED
-from .config import FlockConfig
-from .dagnn_training import DAGNNTrainConfig
+from ..book import DATA_DIR, ROOT, TEST_SEED
+from ..config import FlockConfig
+from ..dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
 from .runs import VGAI_RUNS
 from .ray_runner import run_jobs
 from .table_cells import ModelSpec, evaluate_cell, model_path
-from .vgai_config import VGAITrainConfig
+from ..vgai_config import VGAITrainConfig
 
 @dataclass(frozen=True)
 class ReproduceConfig:

@@ -16,17 +16,17 @@ import shutil
 from pathlib import Path
 from typing import Optional, Union
 
-from .book import DATA_DIR, EVAL_SEED, SELECTION_SEED, VALIDATION_SEED
-from .checkpoints import is_finished_with, load_estimator, save_estimator
-from .config import FlockConfig
-from .dagnn_training import DAGNNTrainConfig, train_dagnn
-from .evaluate import relative_cost
-from .imitation import load_or_train
+from ..book import DATA_DIR, EVAL_SEED, SELECTION_SEED, VALIDATION_SEED
+from ..checkpoints import is_finished_with, load_estimator, save_estimator
+from ..config import FlockConfig
+from ..dagnn_training import DAGNNTrainConfig, train_dagnn
+from ..evaluate import relative_cost
+from ..imitation import load_or_train
 from .provenance import Provenance, sha256
-from .state_estimation import estimator_quality, train_state_estimator
-from .vgai_config import PLAIN_RECIPE, VGAITrainConfig
-from .vgai_training import train_vgai
-from .vision import VisionConfig
+from ..state_estimation import estimator_quality, train_state_estimator
+from ..vgai_config import PLAIN_RECIPE, VGAITrainConfig
+from ..vgai_training import train_vgai
+from ..vision import VisionConfig
 
 DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
     "dagnn_K4": DAGNNTrainConfig(),                          # the default: K - 1 = 3 exchanges
@@ -86,7 +86,7 @@ def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Op
                      provenance: Optional[dict] = None) -> Path:
     """Save a RelativeCost's summary with its configuration as JSON (what the notebooks display),
     its first episodes one by one (``RelativeCost.pinned``) and, when given, its provenance
-    (``vgai_lite.provenance``)."""
+    (``vgai_lite.lab.provenance``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     out = {"config": dataclasses.asdict(cfg), **result.summary(), "pinned": result.pinned(), **(extra or {})}

@@ -36,7 +36,7 @@ from typing import Optional
 import torch
 import torch.nn.functional as F_
 
-from .flocking import check_state
+from ..flocking import check_state
 
 
 def _check(value, name: str, low: float, high: float = math.inf) -> float:

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from typing import Optional, Sequence
 
-from .config import FlockConfig
-from .dagnn_training import DAGNNTrainConfig
-from .graphs import DEFAULT_GSO
-from .render import CAMERAS
-from .vgai_config import VGAITrainConfig
-from .vision import MOTION_SCALE, VisionConfig
+from ..config import FlockConfig
+from ..dagnn_training import DAGNNTrainConfig
+from ..graphs import DEFAULT_GSO
+from ..render import CAMERAS
+from ..vgai_config import VGAITrainConfig
+from ..vision import MOTION_SCALE, VisionConfig
 
 
 def _rows() -> dict:
