@@ -13,7 +13,8 @@ from vgai_lite.graphs import adjacency, gso
 from vgai_lite.learned_controllers import VGAIController
 from vgai_lite.models import AggregationMLP, ResidualBlock, VGAIModel, VisualCNN
 from vgai_lite.render import RenderConfig
-from vgai_lite.vgai_training import VGAITrainConfig, bptt_loss, stage1_cache_file, train_vgai
+from vgai_lite.vgai_config import VGAITrainConfig
+from vgai_lite.vgai_training import bptt_loss, stage1_cache_file, train_vgai
 from vgai_lite.vision import MOTION_SCALE, VisionConfig, camera_input, stored_images
 
 CFG = FlockConfig(N=20)

@@ -46,7 +46,7 @@ from .learned_controllers import DAGNNController, VGAIController
 from .models import AggregationMLP, VGAIModel, VisualCNN
 from .render import RenderConfig, render_egocentric, render_topdown
 from .state_estimation import train_state_estimator
-from .vgai_config import VGAITrainConfig
+from .vgai_config import BOOK, PAPER, VGAITrainConfig, book_recipe
 from .vgai_training import bptt_loss, train_vgai
 from .vision import VisionConfig, camera_input
 
@@ -60,7 +60,7 @@ __all__ = [
     "aggregation_sequence", "RenderConfig", "render_egocentric", "render_topdown", "VisionConfig",
     "camera_input", "AggregationMLP", "VisualCNN", "VGAIModel", "DAGNNController", "VGAIController",
     "save_controller", "load_controller", "load_estimator", "dagger_mix", "fly_dagger", "load_or_train",
-    "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "train_vgai", "bptt_loss",
+    "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "PAPER", "BOOK", "book_recipe", "train_vgai", "bptt_loss",
     "train_state_estimator", "consensus", "Consensus",
     "velocity_variance",
 ]

@@ -32,7 +32,7 @@ from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.models import VisualCNN
 from vgai_lite.render import CAMERAS
 from vgai_lite.lab.runs import book_estimator
-from vgai_lite.vgai_training import estimator_quality, train_state_estimator
+from vgai_lite.state_estimation import estimator_quality, train_state_estimator
 from vgai_lite.vision import VisionConfig, stored_images
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)

@@ -38,7 +38,8 @@ from vgai_lite.book import DATA_DIR, QUICK, TEST_SEED, pick, prose
 from vgai_lite.evaluate import as_safe_as_expert, flocked
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.lab.runs import training_minutes
-from vgai_lite.vgai_training import VGAITrainConfig, train_vgai
+from vgai_lite.vgai_config import BOOK, BOOK_RECIPE, book_recipe
+from vgai_lite.vgai_training import train_vgai
 from vgai_lite.viz import PALETTE
 
 cfg = FlockConfig()
@@ -87,10 +88,12 @@ plt.show()
 # The CNN's last $F/3$ features are odd in the motion channels (`motion_features`). These four
 # changes to the paper's recipe are what make VGAI flock; section 6 explains each one and measures
 # what it buys. Every knob lives in one configuration object, `VGAITrainConfig`, whose defaults are
-# the book's recipe:
+# the paper's VGAI (`PAPER`); the book's recipe is the preset `BOOK`, the paper's with these four
+# changes (`BOOK_RECIPE`; `book_recipe(F=6)` is the book's recipe at F = 6):
 
 # %%
-print(VGAITrainConfig())
+print(BOOK_RECIPE)
+print(BOOK)
 
 # %% [markdown]
 # The book ships the trained controller (`data/vgai/vgai_F24.pt`, the training seed chosen in
@@ -102,7 +105,7 @@ if QUICK:
     from vgai_lite.render import RenderConfig
     from vgai_lite.vision import VisionConfig
 
-    tiny = VGAITrainConfig(F=6, K=2, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8,
+    tiny = book_recipe(F=6, K=2, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8,
                            vision=VisionConfig(render=RenderConfig(view_height=8, view_width=16)),
                            expert_episodes=1, dagger_rounds=1, episodes_per_round=2, warm_steps=2,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=1)
