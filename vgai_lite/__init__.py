@@ -32,18 +32,18 @@ they import the method, never the other way round.
 from .aggregation import AggregationBuffer, aggregation_sequence
 from .checkpoints import load_controller, load_estimator, save_controller
 from .config import FlockConfig
-from .consensus import Consensus, consensus, velocity_variance
+from .consensus import Consensus, consensus
 from .controllers import (ExpertController, LocalController, expert_control, local_control,
                           potential, potential_gradient)
 from .dagnn_training import DAGNNTrainConfig, train_dagnn
 from .evaluate import RelativeCost, relative_cost
 from .features import local_features
 from .flocking import (Controller, Trajectory, flocking_cost, min_pair_distance, rollout,
-                       sample_initial_state, saturate, step)
+                       sample_initial_state, saturate, step, velocity_variance)
 from .graphs import adjacency, gso, k_hop_reach
 from .imitation import dagger_mix, fly_dagger, load_or_train
 from .learned_controllers import DAGNNController, VGAIController
-from .models import AggregationMLP, VGAIModel, VisualCNN
+from .models import AggregationMLP, OddMotionCNN, VGAIModel, VisualCNN
 from .render import RenderConfig, render_egocentric, render_topdown
 from .state_estimation import train_state_estimator
 from .vgai_config import BOOK, PAPER, VGAITrainConfig, book_recipe
@@ -58,7 +58,7 @@ __all__ = [
     "potential", "potential_gradient", "ExpertController", "LocalController", "relative_cost",
     "RelativeCost", "adjacency", "gso", "k_hop_reach", "local_features", "AggregationBuffer",
     "aggregation_sequence", "RenderConfig", "render_egocentric", "render_topdown", "VisionConfig",
-    "camera_input", "AggregationMLP", "VisualCNN", "VGAIModel", "DAGNNController", "VGAIController",
+    "camera_input", "AggregationMLP", "VisualCNN", "OddMotionCNN", "VGAIModel", "DAGNNController", "VGAIController",
     "save_controller", "load_controller", "load_estimator", "dagger_mix", "fly_dagger", "load_or_train",
     "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "PAPER", "BOOK", "book_recipe", "train_vgai", "bptt_loss",
     "train_state_estimator", "consensus", "Consensus",

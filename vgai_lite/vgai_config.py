@@ -17,7 +17,7 @@ import torch
 
 from .config import config_dict
 from .graphs import DEFAULT_GSO
-from .models import AggregationMLP, VGAIModel, VisualCNN
+from .models import AggregationMLP, VGAIModel, visual_cnn
 from .vision import VisionConfig
 
 
@@ -144,7 +144,7 @@ class VGAITrainConfig:
     def new_model(self) -> VGAIModel:
         """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""
         C, H, W = self.vision.image_shape()
-        return VGAIModel(VisualCNN(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
+        return VGAIModel(visual_cnn(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
                          AggregationMLP(self.K, self.F, self.hidden))
 
 

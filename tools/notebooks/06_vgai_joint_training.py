@@ -341,7 +341,7 @@ prose("What each step bought, on these episodes:\n\n" + "\n".join(lines) + "\n\n
 # A drone's motion channels are $D_i = 5\,(I_i(t) - I_i(t-g))$; when every drone moves alike, every
 # $D_i = 0$, and if the neighbours' relative velocities all flip sign, $D_i$ flips sign too (to
 # first order). So the velocity features should be *odd* in $D$ and the position features *even*.
-# `VisualCNN(motion_features=F_m)` builds this in: it runs the same trunk $\psi$ on $[I, D]$ and on
+# `OddMotionCNN(..., motion_features=F_m)` builds this in: it runs the same trunk $\psi$ on $[I, D]$ and on
 # $[I, -D]$ and keeps
 #
 # $$x^{even} = \tfrac12\big(\psi(I, D) + \psi(I, -D)\big), \qquad x^{odd} = \tfrac12\big(\psi(I, D) - \psi(I, -D)\big)$$

@@ -54,9 +54,8 @@ from ..vgai_config import VGAITrainConfig, book_recipe
 @dataclass(frozen=True)
 class ReproduceConfig:
     """What a reproduction run does. The committed data/results/results.json is the defaults'
-    (``python -m vgai_lite reproduce``), flying the book's shipped VGAIs (notebook 06's recipe); its
-    provenance lists the earlier invocations (a from-scratch run, ``--retrain --seeds 1``, and an
-    ``--extras`` run, both with last round's VGAI recipe, whose cells stay in data/results/cells/).
+    (``python -m vgai_lite reproduce``), flying the book's shipped VGAIs; its provenance lists every
+    invocation that computed its cells (data/results/cells/).
 
     Attributes:
         episodes: held-out episodes per cell (N' <= 75); ``episodes_large`` for N' >= 100, where a
