@@ -51,6 +51,8 @@ def pytest_collection_modifyitems(session, config, items):
     from vgai_lite.lab.course import is_score_cell
 
     for item in items:
+        if item.path.suffix == ".ipynb":  # executing the book, even in quick mode, takes minutes
+            item.add_marker(pytest.mark.slow)
         cell = getattr(item, "cell", None)  # nbval's IPyNbCell
         if cell is not None and isinstance(getattr(item, "options", None), dict) and is_score_cell(cell.source):
             item.options["check"] = True

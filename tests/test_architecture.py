@@ -41,6 +41,7 @@ def _own_imports(node, name: str) -> set:
     return out & (set(MODULES) | {"lab"})
 
 
+@pytest.mark.slow
 def test_results_of_the_shipped_controllers_are_the_ones_measured_before_the_refactor():
     """Relative cost on the first 3 held-out episodes, measured with the pre-refactor library
     (commit b429607): the DAGNN K-1 = 3 and last round's VGAI F = 24 (now kept as

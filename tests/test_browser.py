@@ -23,6 +23,8 @@ import pytest
 from devtools import CHROMIUM, DevTools, start_chromium
 from devtools import free_port as _free_port, wait_http as _wait_http
 
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
+
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 IMAGE_MIMES = ("image/png", "image/gif", "image/jpeg", "image/svg+xml")

@@ -88,6 +88,7 @@ def test_student_copies_refuse_to_overwrite_the_book():
         make_student_copies(ROOT / "notebooks")
 
 
+@pytest.mark.slow
 def test_grader_gives_full_marks_to_a_solution_notebook(tmp_path):
     """The grader's machinery on one notebook's solutions; nbval's run of every graded notebook
     compares its score cell with the committed full marks (conftest.py), so each solution is checked there."""
@@ -110,6 +111,7 @@ def test_every_committed_notebook_shows_full_marks_in_its_score_cell(path):
     assert f"Score for notebook {path.name[:2]}: {n}/{n}" in text and text.count("PASSED") == n
 
 
+@pytest.mark.slow
 def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     """Under nbval with the repository's conftest, a score cell whose committed output says 1/1 fails
     when the check did not pass (here: it never ran), and passes when its output is what it prints."""
@@ -141,6 +143,7 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     assert as_printed.returncode == 0 and "1 passed" in as_printed.stdout, as_printed.stdout[-2000:]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
 def test_grader_gives_zero_to_untouched_student_copies(path, student_dir):
     student = grade_notebook(student_dir / path.name)
@@ -152,6 +155,7 @@ def test_grader_gives_zero_to_untouched_student_copies(path, student_dir):
         assert not e["passed"] and "not implemented" in e["message"]
 
 
+@pytest.mark.slow
 def test_grader_rejects_what_it_cannot_grade(tmp_path):
     with pytest.raises(FileNotFoundError):
         grade_notebook(tmp_path / "01_missing.ipynb")

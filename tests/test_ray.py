@@ -13,6 +13,8 @@ import pytest
 
 from vgai_lite.lab.reproduce import ReproduceConfig, run
 
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
+
 
 def _need_ray():
     if importlib.util.find_spec("ray") is None:

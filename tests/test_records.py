@@ -80,6 +80,7 @@ for _p, _r in PINNED:
     FLIGHTS.setdefault(_flight(_r), []).append((_p, _r))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("group", list(FLIGHTS.values()),
                          ids=[str(g[0][0].relative_to(DATA_DIR)) for g in FLIGHTS.values()])
 def test_a_records_pinned_episodes_fly_again_to_the_same_costs(group):

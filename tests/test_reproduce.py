@@ -66,6 +66,7 @@ def test_bad_requests_are_refused(tmp_path):
         ReproduceConfig(seeds=0)
 
 
+@pytest.mark.slow
 def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
     rc = ReproduceConfig(quick=True, seeds=2)
     results = run(None, rc, out=tmp_path, progress=False)
@@ -97,6 +98,7 @@ def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
     assert again["tables"]["K"] == results["tables"]["K"]
 
 
+@pytest.mark.slow
 def test_retrain_trains_every_model_again_and_recomputes_every_cell(quick_table_k, tmp_path):
     first, folder, _ = quick_table_k  # reproduce --only K --quick --seeds 1 (conftest.py), copied here
     shutil.copytree(folder, tmp_path / "K")

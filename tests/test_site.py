@@ -23,6 +23,8 @@ from pathlib import Path
 import pytest
 from devtools import CHROMIUM, DevTools, free_port, start_chromium, wait_http
 
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
+
 ROOT = Path(__file__).resolve().parent.parent
 CHAPTERS = sorted(p.stem for p in (ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 LOAD_SECONDS = 60
