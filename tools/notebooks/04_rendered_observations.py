@@ -40,7 +40,7 @@ from vgai_lite.viz import animate_views, animation_image, draw_swarm
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
-rcfg = VisionConfig().render  # exactly what VGAI's CNN sees (RenderConfig()'s own default draws more rows)
+rcfg = VisionConfig().render  # exactly what VGAI's CNN sees (RenderConfig(), 12 x 32 per camera)
 r0, v0 = sample_initial_state(cfg, pick(20, 3), torch.Generator().manual_seed(EVAL_SEED))
 print("quick mode" if QUICK else "full mode")
 print(rcfg)
