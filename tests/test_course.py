@@ -63,6 +63,17 @@ def test_student_copy_has_no_solution_and_no_output(path):
     nbformat.validate(copy)
 
 
+@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
+def test_a_student_copy_keeps_the_takeaways_and_the_way_on(path):
+    """A written answer's cell is replaced in the student copy: the notebook's key takeaways and its
+    "Next" must sit in cells of their own, or a student never reads them."""
+    nb = nbformat.read(path, as_version=4)
+    copy, _ = student_copy(nb, path.name)
+    for heading in ("## Key takeaways", "## Next"):
+        if any(heading in c.source for c in nb.cells):
+            assert any(heading in c.source for c in copy.cells), f"{path.name}: {heading!r} is lost in the student copy"
+
+
 def test_score_counts_this_sessions_checks(capsys):
     def wrong(u_l, u_e, p, g):
         return u_e

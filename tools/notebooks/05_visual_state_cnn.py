@@ -368,6 +368,9 @@ else:
 # variant over a few seeds (and at the full length of stage 1) and switches only if circular
 # padding is better on average by more than the spread between seeds. It costs nothing at run time
 # (the same convolutions, padded differently), so a switch needs only that evidence.
+
+# %% [markdown]
+# ## Key takeaways
 #
 # * The CNN pools rows only, so every column's bearing survives to its last layers.
 # * Regressing the DAGNN's exact features (visual state estimation) shows what the CNN can see: relative positions well; relative velocities from the first step with two frames, and from a single frame only once the formation betrays them; small ones poorly either way.
