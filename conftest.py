@@ -48,9 +48,11 @@ def pytest_configure(config):
 
 
 def pytest_collection_modifyitems(session, config, items):
-    from vgai_lite.course import is_score_cell
+    from vgai_lite.lab.course import is_score_cell
 
     for item in items:
+        if item.path.suffix == ".ipynb":  # executing the book, even in quick mode, takes minutes
+            item.add_marker(pytest.mark.slow)
         cell = getattr(item, "cell", None)  # nbval's IPyNbCell
         if cell is not None and isinstance(getattr(item, "options", None), dict) and is_score_cell(cell.source):
             item.options["check"] = True
@@ -63,7 +65,7 @@ def quick_table_k(tmp_path_factory):
     one torch thread, the threads of each task of the Ray test. Tests that change the folder copy it."""
     import torch
 
-    from vgai_lite.reproduce import ReproduceConfig, run
+    from vgai_lite.lab.reproduce import ReproduceConfig, run
 
     out = tmp_path_factory.mktemp("quick_K") / "serial"
     threads = torch.get_num_threads()

@@ -23,6 +23,8 @@ import pytest
 from devtools import CHROMIUM, DevTools, start_chromium
 from devtools import free_port as _free_port, wait_http as _wait_http
 
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
+
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 IMAGE_MIMES = ("image/png", "image/gif", "image/jpeg", "image/svg+xml")
@@ -48,7 +50,7 @@ def book_in_a_browser(tmp_path_factory):
     news.parent.mkdir(parents=True)
     news.write_text(json.dumps({"fetchNews": "false", "checkForUpdates": False}))
     # the book's notebooks trusted, as `python -m vgai_lite lab` does before it opens them
-    subprocess.run([sys.executable, "-c", "from pathlib import Path; from vgai_lite.__main__ import trust_book; "
+    subprocess.run([sys.executable, "-c", "from pathlib import Path; from vgai_lite.lab.cli import trust_book; "
                     f"trust_book(Path({str(ROOT / 'notebooks')!r}))"], env=env, check=True)
     lab_port, cdp_port, token = _free_port(), _free_port(), "vgai-lite-browser-test"
     lab = subprocess.Popen([sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={lab_port}",

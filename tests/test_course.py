@@ -11,10 +11,10 @@ import nbformat
 import pytest
 
 from vgai_lite.book import ROOT
-from vgai_lite.course import (grade_notebook, is_score_cell, make_student_copies, report_name, strip_solutions,
+from vgai_lite.lab.course import (grade_notebook, is_score_cell, make_student_copies, report_name, strip_solutions,
                               student_copy)
-from vgai_lite.exercises import EXERCISES, exercises_of, score
-from vgai_lite.method_exercises import check_dagger_mix
+from vgai_lite.lab.exercises import EXERCISES, exercises_of, score
+from vgai_lite.lab.method_exercises import check_dagger_mix
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 GRADED = [p for p in NOTEBOOKS if exercises_of(p.name[:2])]
@@ -63,6 +63,17 @@ def test_student_copy_has_no_solution_and_no_output(path):
     nbformat.validate(copy)
 
 
+@pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
+def test_a_student_copy_keeps_the_takeaways_and_the_way_on(path):
+    """A written answer's cell is replaced in the student copy: the notebook's key takeaways and its
+    "Next" must sit in cells of their own, or a student never reads them."""
+    nb = nbformat.read(path, as_version=4)
+    copy, _ = student_copy(nb, path.name)
+    for heading in ("## Key takeaways", "## Next"):
+        if any(heading in c.source for c in nb.cells):
+            assert any(heading in c.source for c in copy.cells), f"{path.name}: {heading!r} is lost in the student copy"
+
+
 def test_score_counts_this_sessions_checks(capsys):
     def wrong(u_l, u_e, p, g):
         return u_e
@@ -88,6 +99,7 @@ def test_student_copies_refuse_to_overwrite_the_book():
         make_student_copies(ROOT / "notebooks")
 
 
+@pytest.mark.slow
 def test_grader_gives_full_marks_to_a_solution_notebook(tmp_path):
     """The grader's machinery on one notebook's solutions; nbval's run of every graded notebook
     compares its score cell with the committed full marks (conftest.py), so each solution is checked there."""
@@ -110,6 +122,7 @@ def test_every_committed_notebook_shows_full_marks_in_its_score_cell(path):
     assert f"Score for notebook {path.name[:2]}: {n}/{n}" in text and text.count("PASSED") == n
 
 
+@pytest.mark.slow
 def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     """Under nbval with the repository's conftest, a score cell whose committed output says 1/1 fails
     when the check did not pass (here: it never ran), and passes when its output is what it prints."""
@@ -120,7 +133,7 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     def probe(state, points):
         ids = exercises_of("02")
         nb = nbformat.v4.new_notebook()
-        cell = nbformat.v4.new_code_cell('from vgai_lite.exercises import score\n\nscore("02");', execution_count=1)
+        cell = nbformat.v4.new_code_cell('from vgai_lite.lab.exercises import score\n\nscore("02");', execution_count=1)
         listing = "".join(f"  {k} {EXERCISES[k]:45s} {state}\n" for k in ids)
         cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=(
             f"{listing}Score for notebook 02: {points}/{len(ids)}\n"))]
@@ -141,6 +154,7 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     assert as_printed.returncode == 0 and "1 passed" in as_printed.stdout, as_printed.stdout[-2000:]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", GRADED, ids=lambda p: p.name[:2])
 def test_grader_gives_zero_to_untouched_student_copies(path, student_dir):
     student = grade_notebook(student_dir / path.name)
@@ -152,6 +166,7 @@ def test_grader_gives_zero_to_untouched_student_copies(path, student_dir):
         assert not e["passed"] and "not implemented" in e["message"]
 
 
+@pytest.mark.slow
 def test_grader_rejects_what_it_cannot_grade(tmp_path):
     with pytest.raises(FileNotFoundError):
         grade_notebook(tmp_path / "01_missing.ipynb")

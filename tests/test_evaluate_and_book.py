@@ -7,7 +7,7 @@ import torch
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost
 from vgai_lite.controllers import potential_gradient
-from vgai_lite.exercises import check_flocking_cost, check_potential_gradient
+from vgai_lite.lab.exercises import check_flocking_cost, check_potential_gradient
 from vgai_lite.flocking import flocking_cost
 
 
@@ -99,7 +99,7 @@ def test_quick_mode_is_read_from_one_environment_variable(monkeypatch):
 
 def test_aggregation_and_feature_checks_pass_the_library_and_catch_mistakes():
     from vgai_lite.aggregation import aggregation_sequence
-    from vgai_lite.exercises import check_aggregation_sequence, check_local_features
+    from vgai_lite.lab.exercises import check_aggregation_sequence, check_local_features
     from vgai_lite.features import local_features
 
     assert check_aggregation_sequence(lambda X, S, K: aggregation_sequence(X[None], S[None], K)[0, -1])
@@ -147,7 +147,7 @@ def test_the_lab_command_trusts_exactly_the_books_notebooks(tmp_path, monkeypatc
     import nbformat
     from nbformat.sign import NotebookNotary
 
-    from vgai_lite.__main__ import trust_book
+    from vgai_lite.lab.cli import trust_book
     from vgai_lite.book import ROOT
 
     monkeypatch.setenv("JUPYTER_DATA_DIR", str(tmp_path / "data"))
@@ -164,7 +164,7 @@ def test_the_lab_command_trusts_exactly_the_books_notebooks(tmp_path, monkeypatc
 
 
 def test_findings_use_one_criterion():
-    from vgai_lite import findings
+    from vgai_lite.lab import findings
 
     a = {"relative_cost_mean": 2.0, "relative_cost_mean_ci95": [1.9, 2.1]}
     b = {"relative_cost_mean": 1.5, "relative_cost_mean_ci95": [1.4, 1.6]}

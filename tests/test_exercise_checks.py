@@ -11,11 +11,11 @@ import torch
 import torch.nn.functional as nnf
 from torch import nn
 
-from vgai_lite.exercises import check_aggregation_sequence
-from vgai_lite.method_exercises import (check_bptt_loss, check_dagger_mix, check_dagger_round, check_residual_block,
+from vgai_lite.lab.exercises import check_aggregation_sequence
+from vgai_lite.lab.method_exercises import (check_bptt_loss, check_dagger_mix, check_dagger_round, check_residual_block,
                                          check_sym_gso)
 from vgai_lite.aggregation import aggregation_sequence
-from vgai_lite.experiment_exercises import check_circular_conv, check_variance_at
+from vgai_lite.lab.experiment_exercises import check_circular_conv, check_variance_at
 
 REPEATS = 5
 
@@ -404,8 +404,8 @@ def test_06_3_rejects_a_loss_without_gradient():
 # ---------------------------------------------------------------------------------------------
 # 01.1: the potential's gradient (eq. 3)
 
-from vgai_lite.exercises import check_flocking_cost, check_local_features, check_pinhole, check_potential_gradient  # noqa: E402
-from vgai_lite.experiment_exercises import check_odd_part  # noqa: E402
+from vgai_lite.lab.exercises import check_flocking_cost, check_local_features, check_pinhole, check_potential_gradient  # noqa: E402
+from vgai_lite.lab.experiment_exercises import check_odd_part  # noqa: E402
 
 
 def grad_u(r_ij, rho, dtype=None, cut="norm", sign=+1.0, factor=2.0, first_power=2, log_power=2):

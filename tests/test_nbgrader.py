@@ -18,8 +18,10 @@ import nbformat
 import pytest
 
 from vgai_lite.book import QUICK_ENV, ROOT
-from vgai_lite.course import grade_notebook, is_written_answer, nbgrader_course, student_copy
-from vgai_lite.exercises import exercises_of
+from vgai_lite.lab.course import grade_notebook, is_written_answer, nbgrader_course, student_copy
+from vgai_lite.lab.exercises import exercises_of
+
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
 
 NOTEBOOK = "02_graph_shift_operators.ipynb"
 

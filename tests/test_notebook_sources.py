@@ -42,7 +42,7 @@ def test_readme_results_section_is_the_one_the_records_give():
 # Numbers that may stand in a markdown cell: definitions and arithmetic of the book's set-up, not
 # measurements (a measured number is rendered from computed values with ``vgai_lite.book.prose``).
 # Besides these: integers up to 12 (counts, section and equation numbers), years, every number of
-# the paper's tables (``vgai_lite.paper``) and every value of the config objects.
+# the paper's tables (``vgai_lite.lab.paper``) and every value of the config objects.
 DEFINED_NUMBERS = {
     "360°": "the panorama's field of view",
     "90°": "one camera's horizontal field of view",
@@ -89,7 +89,7 @@ def _config_values() -> set:
         elif isinstance(x, (int, float)) and not isinstance(x, bool):
             out.add(float(x))
 
-    from vgai_lite.robustness import TARGETS, RobustnessConfig
+    from vgai_lite.lab.robustness import TARGETS, RobustnessConfig
 
     for c in (FlockConfig(), DAGNNTrainConfig(), VGAITrainConfig(), VisionConfig(), RenderConfig(), RobustnessConfig()):
         walk(c)
@@ -143,7 +143,7 @@ def test_prose_holds_no_hand_typed_measurement(source):
     """Numbers in a notebook's prose that come from a measurement are rendered from computed values
     (``book.prose``), so they cannot go stale; a markdown cell may hold only numbers that define the
     set-up: the paper's, the config objects', and those of DEFINED_NUMBERS (each with its reason)."""
-    from vgai_lite.paper import PAPER, TABLES
+    from vgai_lite.lab.paper import PAPER, TABLES
 
     allowed = _config_values() | _numbers_in(PAPER) | _numbers_in(TABLES)
     bad = [(i, n) for i, c in enumerate(parse(source.read_text()).cells) if c.cell_type == "markdown"

@@ -129,6 +129,7 @@ VGAI_STARTS_PER_N = 250
 independently per swarm, so each kind is among them about 60 times)."""
 
 
+@pytest.mark.slow
 def test_property_ten_thousand_random_starts_never_make_a_nan(learned):
     """10,000 initial conditions (N = 2, 3, 4, 6; 2,500 each) flown by the expert, Local and the DAGNN
     (20 steps), and the first 1,000 of them (250 per N, every kind of start among them) by VGAI (3 steps,

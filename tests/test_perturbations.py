@@ -9,9 +9,9 @@ from vgai_lite.checkpoints import load_controller
 from vgai_lite.config import FlockConfig
 from vgai_lite.controllers import LocalController
 from vgai_lite.flocking import rollout, sample_initial_state
-from vgai_lite.perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
+from vgai_lite.lab.perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
                                      World, perturbed)
-from vgai_lite.robustness import RobustnessConfig, curve, find, plan, run
+from vgai_lite.lab.robustness import RobustnessConfig, curve, find, plan, run
 
 CFG = FlockConfig()
 

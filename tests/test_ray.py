@@ -11,7 +11,9 @@ import time
 
 import pytest
 
-from vgai_lite.reproduce import ReproduceConfig, run
+from vgai_lite.lab.reproduce import ReproduceConfig, run
+
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
 
 
 def _need_ray():
@@ -45,7 +47,7 @@ def test_a_ray_run_gives_the_serial_run_s_numbers_and_resumes(quick_table_k, tmp
 
 
 def test_without_ray_the_flag_says_how_to_install_it(monkeypatch):
-    from vgai_lite import ray_runner
+    from vgai_lite.lab import ray_runner
 
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails, as where it is not installed
     with pytest.raises(SystemExit, match="requirements-cluster.txt"):
@@ -58,7 +60,7 @@ def test_the_projection_spreads_the_work_and_respects_the_chain_of_a_shared_firs
     import json
 
     from vgai_lite.config import FlockConfig
-    from vgai_lite.ray_runner import projected_hours
+    from vgai_lite.lab.ray_runner import projected_hours
     from vgai_lite.vgai_config import VGAITrainConfig
 
     cfg = FlockConfig().to_dict()

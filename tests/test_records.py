@@ -18,7 +18,7 @@ import torch
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, ROOT
 from vgai_lite.flocking import flocking_cost
-from vgai_lite.provenance import Provenance, sha256
+from vgai_lite.lab.provenance import Provenance, sha256
 
 RULES = {"Local": LocalController, "local": LocalController}
 """Records of controllers that are rules (no checkpoint), by the name a record gives them."""
@@ -80,6 +80,7 @@ for _p, _r in PINNED:
     FLIGHTS.setdefault(_flight(_r), []).append((_p, _r))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("group", list(FLIGHTS.values()),
                          ids=[str(g[0][0].relative_to(DATA_DIR)) for g in FLIGHTS.values()])
 def test_a_records_pinned_episodes_fly_again_to_the_same_costs(group):

@@ -9,9 +9,9 @@ import pytest
 
 from vgai_lite.book import DATA_DIR
 from vgai_lite.config import FlockConfig
-from vgai_lite.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEEDS
-from vgai_lite.table_cells import ModelSpec, _shipped_path
-from vgai_lite.reproduce import (PAPER, TABLES, ReproduceConfig, flight_config, models_of, plan,
+from vgai_lite.lab.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEEDS
+from vgai_lite.lab.table_cells import ModelSpec, _shipped_path
+from vgai_lite.lab.reproduce import (PAPER, TABLES, ReproduceConfig, flight_config, models_of, plan,
                                  run)
 
 
@@ -66,6 +66,7 @@ def test_bad_requests_are_refused(tmp_path):
         ReproduceConfig(seeds=0)
 
 
+@pytest.mark.slow
 def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
     rc = ReproduceConfig(quick=True, seeds=2)
     results = run(None, rc, out=tmp_path, progress=False)
@@ -97,6 +98,7 @@ def test_quick_run_of_every_table_is_complete_and_resumable(tmp_path):
     assert again["tables"]["K"] == results["tables"]["K"]
 
 
+@pytest.mark.slow
 def test_retrain_trains_every_model_again_and_recomputes_every_cell(quick_table_k, tmp_path):
     first, folder, _ = quick_table_k  # reproduce --only K --quick --seeds 1 (conftest.py), copied here
     shutil.copytree(folder, tmp_path / "K")
@@ -129,7 +131,7 @@ def test_the_plain_cnn_records_of_retrained_configurations_are_kept():
     """Every configuration retrained with the default recipe keeps its plain-CNN record (notebooks 06-07)."""
     import json
 
-    from vgai_lite.runs import PLAIN_RUNS
+    from vgai_lite.lab.runs import PLAIN_RUNS
     from vgai_lite.vgai_config import VGAITrainConfig
 
     assert "vgai_F24_plain" in PLAIN_RUNS

@@ -23,6 +23,8 @@ from pathlib import Path
 import pytest
 from devtools import CHROMIUM, DevTools, free_port, start_chromium, wait_http
 
+pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
+
 ROOT = Path(__file__).resolve().parent.parent
 CHAPTERS = sorted(p.stem for p in (ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 LOAD_SECONDS = 60
@@ -40,7 +42,7 @@ def site(tmp_path_factory):
     _need(importlib.util.find_spec("sphinx") is not None and importlib.util.find_spec("myst_nb") is not None,
           "the site's packages are not installed: pip install -r requirements-site.txt")
     _need(CHROMIUM is not None, "no Chromium on this machine (apt-get install chromium)")
-    from vgai_lite import website
+    from vgai_lite.lab import website
 
     tmp = tmp_path_factory.mktemp("site")
     info = website.build(tmp / "site")
@@ -148,7 +150,7 @@ def test_search_finds_the_chapters(site):
 def test_without_the_site_packages_the_command_says_how_to_install_them(monkeypatch):
     import importlib.util as iu
 
-    from vgai_lite import website
+    from vgai_lite.lab import website
 
     monkeypatch.setattr(iu, "find_spec", lambda name, *a: None)
     with pytest.raises(SystemExit, match="requirements-site.txt"):

@@ -11,9 +11,10 @@ from vgai_lite.aggregation import aggregation_sequence
 from vgai_lite.checkpoints import load_estimator, save_estimator
 from vgai_lite.graphs import adjacency, gso
 from vgai_lite.learned_controllers import VGAIController
-from vgai_lite.models import AggregationMLP, ResidualBlock, VGAIModel, VisualCNN
+from vgai_lite.models import AggregationMLP, OddMotionCNN, ResidualBlock, VGAIModel, VisualCNN
 from vgai_lite.render import RenderConfig
-from vgai_lite.vgai_training import VGAITrainConfig, bptt_loss, stage1_cache_file, train_vgai
+from vgai_lite.vgai_config import VGAITrainConfig
+from vgai_lite.vgai_training import bptt_loss, stage1_cache_file, train_vgai
 from vgai_lite.vision import MOTION_SCALE, VisionConfig, camera_input, stored_images
 
 CFG = FlockConfig(N=20)
@@ -214,12 +215,12 @@ def test_synthetic_velocities_span_the_disagreements_late_and_early_flights_have
 
 
 def test_motion_features_vanish_when_nothing_moves_and_flip_with_the_motion():
-    """VisualCNN(motion_features=F_m): the last F_m features are odd in the motion channels, the
+    """OddMotionCNN(motion_features=F_m): the last F_m features are odd in the motion channels, the
     others even; a swarm moving as one (every drone's motion frame 0) gives exactly 0 on them, and
     so does the aux head's velocity estimate. The controller flying such a CNN: the same."""
     C, H, W = VISION.image_shape()
     torch.manual_seed(0)
-    cnn = VisualCNN(C, H, W, 6, (2, 4), 8, motion_features=2).double()
+    cnn = OddMotionCNN(C, H, W, 6, (2, 4), 8, motion_features=2).double()
     x = torch.randn(3, C, H, W, dtype=torch.float64)
     mirrored = torch.cat((x[:, :C // 2], -x[:, C // 2:]), 1)
     torch.testing.assert_close(cnn(mirrored)[:, :4], cnn(x)[:, :4])
@@ -232,7 +233,7 @@ def test_motion_features_vanish_when_nothing_moves_and_flip_with_the_motion():
     assert X[:, 4:].abs().max() < 1e-9 and X[:, :4].abs().min() > 0  # 0 up to rounding of the offsets
     assert cnn.estimate_local_features(still.flatten(0, 1))[:, :2].abs().max() < 1e-9
     with pytest.raises(ValueError, match="motion_features"):
-        VisualCNN(C, H, W, 6, motion_features=7)
+        OddMotionCNN(C, H, W, 6, motion_features=7)
     with pytest.raises(ValueError, match="difference"):
         VGAITrainConfig(motion_features=2, vision=dataclasses.replace(VISION, motion_mode="stack"))
 
@@ -240,7 +241,7 @@ def test_motion_features_vanish_when_nothing_moves_and_flip_with_the_motion():
 def test_a_cnn_with_motion_features_round_trips_through_both_file_kinds(tmp_path):
     C, H, W = VISION.image_shape()
     torch.manual_seed(0)
-    cnn = VisualCNN(C, H, W, 6, (2, 4), 8, motion_features=2).eval()
+    cnn = OddMotionCNN(C, H, W, 6, (2, 4), 8, motion_features=2).eval()
     cnn2, _, _ = load_estimator(save_estimator(tmp_path / "e.pt", cnn, VISION, {}))
     assert cnn2.motion_features == 2
     c = VGAIController(VGAIModel(cnn, AggregationMLP(3, 6, (16,))).eval(), CFG, VISION)
@@ -257,7 +258,7 @@ def test_the_default_vgai_is_the_training_seed_the_selection_chose():
     import json
 
     from vgai_lite.book import DATA_DIR, EVAL_SEED
-    from vgai_lite.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEED_RUNS
+    from vgai_lite.lab.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEED_RUNS
 
     choice = json.loads((DATA_DIR / "vgai" / "seeds" / "choice.json").read_text())
     assert choice["selection_seed"] != EVAL_SEED and set(choice["candidates"]) == set(VGAI_SEED_RUNS)

@@ -18,9 +18,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
-from vgai_lite.ray_runner import projected_hours  # noqa: E402
-from vgai_lite.reproduce import PAPER  # noqa: E402
-from vgai_lite.runs import training_minutes  # noqa: E402
+from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
+from vgai_lite.lab.reproduce import PAPER  # noqa: E402
+from vgai_lite.lab.runs import training_minutes  # noqa: E402
 from vgai_lite.book import TEST_SEED  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -168,7 +168,7 @@ def _tables(results: dict) -> str:
                  "to the 1-thread serial run's.")
     proj = {m: projected_hours(results, ROOT / "data" / "results", m) for m in (1, 4, 16)}
     text += (" The full reproduction with 3 training seeds per VGAI row, projected from these cells' recorded times "
-             "(`vgai_lite.ray_runner.projected_hours`, notebook 10, the appendix): "
+             "(`vgai_lite.lab.ray_runner.projected_hours`, notebook 10, the appendix): "
              + ", ".join(f"{p['projected_hours']:.1f} h on {m} machine{'s' if m > 1 else ''}" for m, p in proj.items())
              + " of 2 cores.")
     return text
@@ -179,7 +179,7 @@ def _robustness() -> str:
     import sys
 
     sys.path.insert(0, str(ROOT))
-    from vgai_lite import robustness
+    from vgai_lite.lab import robustness
 
     res = robustness.load(ROOT / "data" / "robustness")
     T = robustness.TARGETS

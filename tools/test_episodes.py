@@ -23,8 +23,8 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, LocalController, load_controller, relative_cost  # noqa: E402
 from vgai_lite.book import DATA_DIR, TEST_SEED  # noqa: E402
-from vgai_lite.provenance import Provenance  # noqa: E402
-from vgai_lite.runs import write_evaluation  # noqa: E402
+from vgai_lite.lab.provenance import Provenance  # noqa: E402
+from vgai_lite.lab.runs import write_evaluation  # noqa: E402
 
 SHIPPED = {"local": None, "dagnn_K4": DATA_DIR / "dagnn" / "dagnn_K4.pt", "vgai_F24": DATA_DIR / "vgai" / "vgai_F24.pt"}
 """The controllers whose headline figures the book reports: name -> checkpoint (None: the local heuristic)."""

@@ -65,8 +65,7 @@ SELECTION_SEED = VALIDATION_SEED
 
 TEST_SEED = 5000
 """Seed of the test episodes: used only for the numbers the book reports, never to choose anything
-(issue 24's protocol). EVAL_SEED's episodes (2020) were the book's held-out episodes before this
-protocol; recipes were compared on them, so they are no longer a test."""
+(notebook 01 says why). EVAL_SEED's episodes (2020) are not a test: recipes were compared on them."""
 
 
 def prose(template: str, **values):

@@ -18,7 +18,7 @@ import torch
 
 from .config import FlockConfig
 from .learned_controllers import DAGNNController, VGAIController
-from .models import AggregationMLP, VGAIModel, VisualCNN
+from .models import AggregationMLP, VGAIModel, VisualCNN, cnn_from_spec
 from .vision import VisionConfig
 
 FORMAT = "vgai-lite-controller/1"
@@ -99,10 +99,7 @@ def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, d
         controller = DAGNNController(model.to(device).eval(), cfg or stored_cfg, spec["gso"],
                                      spec["feature_transform"])
     elif kind == "vgai":
-        c = spec["cnn"]
-        cnn = VisualCNN(c["in_channels"], c["height"], c["width"], spec["F"], c["widths"], c["hidden"],
-                        c.get("motion_features", 0))
-        model = VGAIModel(cnn, AggregationMLP(spec["K"], spec["F"], spec["hidden"]))
+        model = VGAIModel(cnn_from_spec(spec["cnn"], spec["F"]), AggregationMLP(spec["K"], spec["F"], spec["hidden"]))
         _load_weights(model, payload["state_dict"], path)
         controller = VGAIController(model.to(device).eval(), cfg or stored_cfg,
                                     VisionConfig.from_dict(spec["vision"]), spec["gso"])
@@ -125,15 +122,9 @@ def _load_weights(model: torch.nn.Module, state_dict: dict, path) -> None:
 # Stand-alone visual state estimators (notebook 05): a VisualCNN and what it is shown
 
 
-def _motion_spec(cnn: VisualCNN) -> dict:
-    """``motion_features`` in a file's CNN spec, only when used (files before it had none)."""
-    return {"motion_features": cnn.motion_features} if cnn.motion_features else {}
-
-
 def save_estimator(path: Union[str, Path], cnn: VisualCNN, vision: VisionConfig, meta: dict) -> Path:
     payload = {"format": ESTIMATOR_FORMAT, "vision": vision.to_dict(),
-               "cnn": {"in_channels": cnn.in_channels, "height": cnn.height, "width": cnn.width, "F": cnn.F,
-                       "widths": list(cnn.widths), "hidden": cnn.hidden, **_motion_spec(cnn)},
+               "cnn": {**cnn.spec(), "F": cnn.F},
                "state_dict": _weights(cnn), "meta": meta}
     return atomic_save(payload, path)
 
@@ -146,9 +137,7 @@ def load_estimator(path: Union[str, Path]) -> tuple[VisualCNN, VisionConfig, dic
     payload = torch.load(path, map_location="cpu", weights_only=True)
     if not isinstance(payload, dict) or payload.get("format") != ESTIMATOR_FORMAT:
         raise ValueError(f"{path} is not a vgai-lite state estimator (format {ESTIMATOR_FORMAT!r})")
-    c = payload["cnn"]
-    cnn = VisualCNN(c["in_channels"], c["height"], c["width"], c["F"], c["widths"], c["hidden"],
-                    c.get("motion_features", 0))
+    cnn = cnn_from_spec(payload["cnn"], payload["cnn"]["F"])
     _load_weights(cnn, payload["state_dict"], path)
     return cnn.eval(), VisionConfig.from_dict(payload["vision"]), payload["meta"]
 

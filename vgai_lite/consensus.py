@@ -1,6 +1,6 @@
 """Did it flock? Velocity consensus late in a flight and the swarm's cohesion, beside the cost.
 
-Introduced for the VGAI consensus issue (notebooks 06-07). Eq. 1 sums the velocity variance over an
+Introduced in notebook 01. Eq. 1 sums the velocity variance over an
 episode, and most of it accrues in the first steps, where every controller brakes hard; a controller
 whose drones never quite align can still score well. So, beside every relative cost, the book reports:
 
@@ -20,16 +20,11 @@ import torch
 
 from .book import EVAL_SEED
 from .config import FlockConfig
-from .flocking import rollout, sample_initial_state
+from .flocking import rollout, sample_initial_state, velocity_variance
 from .graphs import adjacency, k_hop_reach
 
 CONSENSUS_TIMES = (0.5, 1.0, 2.0, 5.0)
-"""Seconds at which the velocity variance is read (the issue's table; 5 s = 500 steps of 0.01 s)."""
-
-
-def velocity_variance(v: torch.Tensor) -> torch.Tensor:
-    """The summand of eq. 1 at each step: (1/N) sum_i ||v_i(t) - vbar(t)||^2, (T, B, N, 2) -> (T, B)."""
-    return (v - v.mean(dim=2, keepdim=True)).square().sum(-1).mean(-1)
+"""Seconds at which the velocity variance is read (5 s = 500 steps of 0.01 s)."""
 
 
 def groups(r: torch.Tensor, R: float) -> torch.Tensor:

@@ -15,9 +15,9 @@ from typing import Callable, Optional
 import torch
 
 from .config import FlockConfig
-from .consensus import Consensus, groups, velocity_variance
+from .consensus import Consensus, groups
 from .controllers import ExpertController
-from .flocking import flocking_cost, rollout, sample_initial_state
+from .flocking import flocking_cost, rollout, sample_initial_state, velocity_variance
 
 CLOSE_CALLS = (0.05, 0.1)  # m: a pair closer than this counts as a close call
 PINNED_EPISODES = 3

@@ -109,8 +109,7 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
         raise ValueError(f"batch must be a positive integer, got {batch!r}")
     if generator is None:
         generator = torch.Generator().manual_seed(0)
-    N, R2 = cfg.N, cfg.R ** 2
-    dmin2 = cfg.min_init_distance ** 2
+    N, R2, dmin2 = cfg.N, cfg.R ** 2, cfg.min_init_distance ** 2
     rs, vs = [], []
     accepted = tried = 0
     while accepted < batch:
@@ -145,9 +144,7 @@ def sample_initial_state(cfg: FlockConfig, batch: int, generator: Optional[torch
             rs.append(good)
             vs.append(vel + bias)
             accepted += k
-    r = torch.cat(rs).to(dtype=dtype, device=device)
-    v = torch.cat(vs).to(dtype=dtype, device=device)
-    return r, v
+    return torch.cat(rs).to(dtype=dtype, device=device), torch.cat(vs).to(dtype=dtype, device=device)
 
 
 def _disc(cfg: FlockConfig, count: int, generator: torch.Generator) -> torch.Tensor:
@@ -193,6 +190,11 @@ def step(r: torch.Tensor, v: torch.Tensor, u: torch.Tensor, cfg: FlockConfig
     return r + v * Ts + u * (0.5 * Ts * Ts), v + u * Ts
 
 
+def velocity_variance(v: torch.Tensor) -> torch.Tensor:
+    """The summand of eq. 1 at each step: (1/N) sum_i ||v_i(t) - vbar(t)||^2, (T, B, N, 2) -> (T, B)."""
+    return (v - v.mean(dim=2, keepdim=True)).square().sum(-1).mean(-1)
+
+
 def flocking_cost(v: torch.Tensor) -> torch.Tensor:
     """The flocking cost of eq. 1 for a velocity trajectory.
 
@@ -203,8 +205,7 @@ def flocking_cost(v: torch.Tensor) -> torch.Tensor:
     if not isinstance(v, torch.Tensor) or v.ndim != 4 or v.shape[-1] != 2:
         shape = tuple(v.shape) if isinstance(v, torch.Tensor) else type(v).__name__
         raise ValueError(f"flocking_cost expects velocities of shape (T, B, N, 2), got {shape}")
-    deviation = v - v.mean(dim=2, keepdim=True)
-    return deviation.square().sum(dim=-1).mean(dim=2).sum(dim=0)
+    return velocity_variance(v).sum(dim=0)
 
 
 class Controller(Protocol):

@@ -47,6 +47,17 @@ class _Learned:
         with torch.inference_mode(not self.gradients):
             return self.act(self.observe(r, v, world))
 
+    def observe(self, r: torch.Tensor, v: torch.Tensor = None, world=None) -> torch.Tensor:
+        """One exchange: push X(t) (``features``) and S(t) into the buffer and return Z(t), (B, N, K, F).
+        With a ``world`` (notebook 08's perturbations), X(t) is measured in it and S(t) keeps only the
+        links that carried a message."""
+        A = adjacency(r, self.cfg.R)
+        if world is None:
+            S = gso(A, self.gso_kind)
+            return self.buffer.push(self.features(r, v), S)
+        S = gso(world.links(A), self.gso_kind)
+        return self.buffer.push(self.features(r, v, world), S, delay=world.delay)
+
 
 class DAGNNController(_Learned):
     """The paper's DAGNN baseline as a controller: exact local features -> Z(t) -> MLP -> u.
@@ -77,20 +88,11 @@ class DAGNNController(_Learned):
     def reset(self) -> None:
         self.buffer.reset()
 
-    def features(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        """X(t), (B, N, 6): the exact local features (optionally signed-log transformed)."""
-        X = local_features(r, v, self.cfg.R)
+    def features(self, r: torch.Tensor, v: torch.Tensor, world=None) -> torch.Tensor:
+        """X(t), (B, N, 6): the exact local features (optionally signed-log transformed); with a
+        ``world``, from the positions as measured there."""
+        X = local_features(r if world is None else world.positions(r), v, self.cfg.R)
         return signed_log(X) if self.feature_transform == "signed_log" else X
-
-    def observe(self, r: torch.Tensor, v: torch.Tensor, world=None) -> torch.Tensor:
-        """One exchange: push X(t), S(t) into the buffer and return Z(t), (B, N, K, 6).
-        With a ``world``, X(t) comes from the positions as measured there, and S(t) from the links
-        that carried a message."""
-        if world is None:
-            S = gso(adjacency(r, self.cfg.R), self.gso_kind)
-            return self.buffer.push(self.features(r, v), S)
-        S = gso(world.links(adjacency(r, self.cfg.R)), self.gso_kind)
-        return self.buffer.push(self.features(world.positions(r), v), S, delay=world.delay)
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:
         """u(t) = saturate(NN_Theta(Z(t))), (B, N, 2)."""
@@ -158,14 +160,6 @@ class VGAIController(_Learned):
         images = camera_input(self.vision, self.cfg, r, self._remember(r, v), camera)
         return self.model.features(images)
 
-    def observe(self, r: torch.Tensor, v: torch.Tensor = None, world=None) -> torch.Tensor:
-        """One exchange: push X(t), S(t) into the buffer and return Z(t), (B, N, K, F)."""
-        if world is None:
-            S = gso(adjacency(r, self.cfg.R), self.gso_kind)
-            return self.buffer.push(self.features(r, v), S)
-        S = gso(world.links(adjacency(r, self.cfg.R)), self.gso_kind)
-        return self.buffer.push(self.features(r, v, world), S, delay=world.delay)
-
     def act(self, Z: torch.Tensor) -> torch.Tensor:
         """u(t) = saturate(NN_Theta(Z(t))), (B, N, 2)."""
         return saturate(self.model.mlp(Z), self.cfg)
@@ -174,9 +168,7 @@ class VGAIController(_Learned):
         """What ``load_controller`` needs to rebuild this controller (plain values only)."""
         cnn, mlp = self.model.cnn, self.model.mlp
         return {"kind": "vgai", "K": mlp.K, "F": mlp.F, "hidden": list(mlp.hidden), "gso": self.gso_kind,
-                "cnn": {"in_channels": cnn.in_channels, "height": cnn.height, "width": cnn.width,
-                        "widths": list(cnn.widths), "hidden": cnn.hidden,
-                        **({"motion_features": cnn.motion_features} if cnn.motion_features else {})},
+                "cnn": cnn.spec(),
                 "vision": self.vision.to_dict()}
 
     def __repr__(self) -> str:

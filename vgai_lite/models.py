@@ -90,9 +90,74 @@ class VisualCNN(nn.Module):
       fc        (w2 W) -> hidden -> F
     ``aux`` is an extra linear head F -> 6 used only to warm-start the CNN on the exact local
     features (visual state estimation); the controller never uses it.
+    """
 
-    ``motion_features`` F_m (0: off, the paper's plain CNN): the last F_m features are made odd in
-    the motion channels (the second half of the input's channels, D = 5 (I(t) - I(t-g))) and the
+    motion_features = 0
+    """F_m, the features odd in the motion channels: none in the paper's CNN (see ``OddMotionCNN``)."""
+
+    def __init__(self, in_channels: int, height: int, width: int, F: int = 24,
+                 widths: Sequence[int] = (8, 16), hidden: int = 64):
+        super().__init__()
+        if height % 2 or height < 2:
+            raise ValueError(f"VisualCNN needs an even image height >= 2, got {height}")
+        w1, w2 = widths
+        self.in_channels, self.height, self.width, self.F = in_channels, height, width, F
+        self.widths, self.hidden = (int(w1), int(w2)), int(hidden)
+        self.stem = nn.Conv2d(in_channels, w1, 3, stride=(2, 1), padding=1)
+        self.blocks = nn.Sequential(ResidualBlock(w1, w1, (3, 3), pool=height // 2),
+                                    ResidualBlock(w1, w2, (1, 3)), ResidualBlock(w2, w2, (1, 3)),
+                                    ResidualBlock(w2, w2, (1, 3)))
+        self.fc = nn.Sequential(nn.Flatten(), nn.Linear(w2 * width, hidden), nn.ReLU(), nn.Linear(hidden, F))
+        self.aux = nn.Linear(F, 6)
+        self.register_buffer("aux_mean", torch.zeros(6))  # scale of the exact features aux estimates
+        self.register_buffer("aux_std", torch.ones(6))
+
+    def spec(self) -> dict:
+        """The architecture as plain values (F aside), as checkpoint files store it (``cnn_from_spec``)."""
+        return {"in_channels": self.in_channels, "height": self.height, "width": self.width,
+                "widths": list(self.widths), "hidden": self.hidden}
+
+    def aux_standardized(self, x: torch.Tensor) -> torch.Tensor:
+        """The aux head on features x (M, F): the standardised estimate of the 6 local features, (M, 6)."""
+        return self.aux(x)
+
+    def estimate_local_features(self, images: torch.Tensor) -> torch.Tensor:
+        """The warm-start head's estimate of the 6 exact local features, (M, C, H, W) -> (M, 6)."""
+        return self.aux_standardized(self(images)) * self.aux_std + self.aux_mean
+
+    def trunk(self, images: torch.Tensor) -> torch.Tensor:
+        """psi: stem, residual blocks and fully connected layers, (M, C, H, W) -> (M, F)."""
+        # channels-last layout: the same numbers, and on CPU the convolutions' backward pass runs
+        # about twice as fast with it (measured: 0.097 s -> 0.048 s per 400-image step, 2 threads)
+        images = images.contiguous(memory_format=torch.channels_last)
+        return self.fc(self.blocks(torch.relu(self.stem(images))))
+
+    def _check(self, images: torch.Tensor) -> None:
+        if images.shape[1:] != (self.in_channels, self.height, self.width):
+            raise ValueError(f"VisualCNN expects images (M, {self.in_channels}, {self.height}, {self.width}), "
+                             f"got {tuple(images.shape)}")
+
+    def forward(self, images: torch.Tensor) -> torch.Tensor:
+        """(M, C, H, W) -> (M, F)."""
+        self._check(images)
+        return self.trunk(images)
+
+    def flops_per_image(self) -> int:
+        """Multiply-adds x 2 of one forward pass (convolutions and linear layers)."""
+        total, h, w = 0, self.height, self.width
+        w1, w2 = self.widths
+        h2 = h // 2
+        total += 2 * 9 * self.in_channels * w1 * h2 * w                         # stem
+        total += 2 * 2 * 9 * w1 * w1 * h2 * w                                   # block 1
+        total += 2 * 3 * (w1 * w2 + w2 * w2) * w + 2 * w1 * w2 * w              # block 2 (+ 1x1 skip)
+        total += 2 * 2 * 2 * 3 * w2 * w2 * w                                    # blocks 3-4
+        total += 2 * (w2 * w * self.hidden + self.hidden * self.F)              # fc
+        return total * (2 if self.motion_features else 1)                       # [I, D] and [I, -D]
+
+
+class OddMotionCNN(VisualCNN):
+    """The CNN of the book's recipe: ``VisualCNN`` whose last ``motion_features`` F_m features are odd
+    in the motion channels (the second half of the input's channels, D = 5 (I(t) - I(t-g))) and the
     first F - F_m even, by running the trunk psi on [I, D] and on [I, -D]:
 
         x_even = (psi(I, D) + psi(I, -D)) / 2,     x_odd = (psi(I, D) - psi(I, -D)) / 2
@@ -106,57 +171,29 @@ class VisualCNN(nn.Module):
     """
 
     def __init__(self, in_channels: int, height: int, width: int, F: int = 24,
-                 widths: Sequence[int] = (8, 16), hidden: int = 64, motion_features: int = 0):
-        super().__init__()
-        if height % 2 or height < 2:
-            raise ValueError(f"VisualCNN needs an even image height >= 2, got {height}")
-        if not isinstance(motion_features, int) or not 0 <= motion_features <= F:
-            raise ValueError(f"motion_features must be an integer in [0, F] = [0, {F}], got {motion_features!r}")
-        if motion_features and in_channels % 2:
+                 widths: Sequence[int] = (8, 16), hidden: int = 64, motion_features: int = 8):
+        if not isinstance(motion_features, int) or not 0 < motion_features <= F:
+            raise ValueError(f"motion_features must be an integer in [1, F] = [1, {F}], got {motion_features!r}")
+        if in_channels % 2:
             raise ValueError(f"motion_features needs images whose second half of channels is the motion "
                              f"difference (an even channel count), got {in_channels} channels")
+        super().__init__(in_channels, height, width, F, widths, hidden)
         self.motion_features = motion_features
-        w1, w2 = widths
-        self.in_channels, self.height, self.width, self.F = in_channels, height, width, F
-        self.widths, self.hidden = (int(w1), int(w2)), int(hidden)
-        self.stem = nn.Conv2d(in_channels, w1, 3, stride=(2, 1), padding=1)
-        self.blocks = nn.Sequential(ResidualBlock(w1, w1, (3, 3), pool=height // 2),
-                                    ResidualBlock(w1, w2, (1, 3)), ResidualBlock(w2, w2, (1, 3)),
-                                    ResidualBlock(w2, w2, (1, 3)))
-        self.fc = nn.Sequential(nn.Flatten(), nn.Linear(w2 * width, hidden), nn.ReLU(), nn.Linear(hidden, F))
-        self.aux = nn.Linear(F, 6)
-        self.register_buffer("aux_mean", torch.zeros(6))  # scale of the exact features aux estimates
-        self.register_buffer("aux_std", torch.ones(6))
+
+    def spec(self) -> dict:
+        return {**super().spec(), "motion_features": self.motion_features}
 
     def aux_standardized(self, x: torch.Tensor) -> torch.Tensor:
-        """The aux head on features x (M, F): the standardised estimate of the 6 local features,
-        (M, 6). With motion features, velocity outputs read only the odd features (no bias),
-        position outputs only the even ones."""
-        if not self.motion_features:
-            return self.aux(x)
+        """The aux head on features x (M, F), (M, 6): the velocity outputs read only the odd features
+        (no bias), the position outputs only the even ones."""
         odd = torch.arange(self.F, device=x.device) >= self.F - self.motion_features
         vel = torch.arange(6, device=x.device) < 2
         mask = (vel[:, None] == odd[None, :]).to(x.dtype)  # (6, F)
         return nnf.linear(x, self.aux.weight * mask, self.aux.bias * (~vel).to(x.dtype))
 
-    def estimate_local_features(self, images: torch.Tensor) -> torch.Tensor:
-        """The warm-start head's estimate of the 6 exact local features, (M, C, H, W) -> (M, 6)."""
-        return self.aux_standardized(self(images)) * self.aux_std + self.aux_mean
-
-    def trunk(self, images: torch.Tensor) -> torch.Tensor:
-        """psi: stem, residual blocks and fully connected layers, (M, C, H, W) -> (M, F)."""
-        # channels-last layout: the same numbers, and on CPU the convolutions' backward pass runs
-        # about twice as fast with it (measured: 0.097 s -> 0.048 s per 400-image step, 2 threads)
-        images = images.contiguous(memory_format=torch.channels_last)
-        return self.fc(self.blocks(torch.relu(self.stem(images))))
-
     def forward(self, images: torch.Tensor) -> torch.Tensor:
-        """(M, C, H, W) -> (M, F)."""
-        if images.shape[1:] != (self.in_channels, self.height, self.width):
-            raise ValueError(f"VisualCNN expects images (M, {self.in_channels}, {self.height}, {self.width}), "
-                             f"got {tuple(images.shape)}")
-        if not self.motion_features:
-            return self.trunk(images)
+        """(M, C, H, W) -> (M, F): the first F - F_m features even in D, the last F_m odd."""
+        self._check(images)
         c = self.in_channels // 2
         mirrored = torch.cat((images[:, :c], -images[:, c:]), dim=1)  # [I, -D]
         y_plus, y_minus = self.trunk(torch.cat((images, mirrored))).chunk(2)
@@ -164,17 +201,18 @@ class VisualCNN(nn.Module):
         split = self.F - self.motion_features
         return torch.cat((even[:, :split], odd[:, split:]), dim=1)
 
-    def flops_per_image(self) -> int:
-        """Multiply-adds x 2 of one forward pass (convolutions and linear layers)."""
-        total, h, w = 0, self.height, self.width
-        w1, w2 = self.widths
-        h2 = h // 2
-        total += 2 * 9 * self.in_channels * w1 * h2 * w                         # stem
-        total += 2 * 2 * 9 * w1 * w1 * h2 * w                                   # block 1
-        total += 2 * 3 * (w1 * w2 + w2 * w2) * w + 2 * w1 * w2 * w              # block 2 (+ 1x1 skip)
-        total += 2 * 2 * 2 * 3 * w2 * w2 * w                                    # blocks 3-4
-        total += 2 * (w2 * w * self.hidden + self.hidden * self.F)              # fc
-        return total * (2 if self.motion_features else 1)                       # [I, D] and [I, -D]
+
+def visual_cnn(in_channels: int, height: int, width: int, F: int = 24, widths: Sequence[int] = (8, 16),
+               hidden: int = 64, motion_features: int = 0) -> VisualCNN:
+    """The paper's ``VisualCNN`` (motion_features 0) or the book's ``OddMotionCNN``."""
+    args = (in_channels, height, width, F, widths, hidden)
+    return OddMotionCNN(*args, motion_features) if motion_features else VisualCNN(*args)
+
+
+def cnn_from_spec(spec: dict, F: int) -> VisualCNN:
+    """The CNN a checkpoint's ``spec`` (``VisualCNN.spec``) describes, with F features."""
+    return visual_cnn(spec["in_channels"], spec["height"], spec["width"], F, spec["widths"], spec["hidden"],
+                      spec.get("motion_features", 0))
 
 
 class VGAIModel(nn.Module):

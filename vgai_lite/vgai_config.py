@@ -1,7 +1,11 @@
 """What defines a VGAI training run: ``VGAITrainConfig``, every knob of ``vgai_training`` in one place.
 
-Introduced in notebook 06. The paper gives the loss (L1, eq. 10), the optimiser (Adam, learning
-rate 1e-3) and DAgger's probability (0.33); every other field is our choice, explained beside it.
+Introduced in notebook 06. ``VGAITrainConfig()`` is the paper's VGAI (``PAPER``): the plain CNN of
+Fig. 2, stage 1 on the expert's own states, the L1 action loss of eq. 10 alone, DAgger's mixture
+(p = 0.33). The paper gives the loss, the optimiser (Adam, learning rate 1e-3) and DAgger's
+probability; every other field is our choice, explained beside it. The book's VGAI (``BOOK``,
+``book_recipe``) is the paper's with the four changes notebook 06's ablation measures
+(``BOOK_RECIPE``).
 """
 
 from __future__ import annotations
@@ -13,18 +17,13 @@ import torch
 
 from .config import config_dict
 from .graphs import DEFAULT_GSO
-from .models import AggregationMLP, VGAIModel, VisualCNN
+from .models import AggregationMLP, VGAIModel, visual_cnn
 from .vision import VisionConfig
 
 
-OPTIONAL_FIELDS = ("synthetic_share", "motion_features", "aux_weight", "flight_steps", "mlp_on_exact",
-                   "anchor_weight", "joint_early_share", "learner_swarms")
-"""Fields added in the consensus round (notebook 06, section 6); a stored config without them had 0."""
-
-PLAIN_RECIPE = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0, "learner_swarms": 0.0}
-"""The recipe of the book's first VGAIs (the paper's plain CNN, stage 1 on expert states only, the
-action loss alone in stage 3): ``VGAITrainConfig(F=6, **PLAIN_RECIPE)``."""
-
+BOOK_ADDITIONS = ("synthetic_share", "motion_features", "aux_weight", "flight_steps", "mlp_on_exact",
+                  "anchor_weight", "joint_early_share", "learner_swarms")
+"""Fields the paper's VGAI does not have: 0 in ``PAPER``, stored by ``to_dict`` only when switched on."""
 
 @dataclass(frozen=True)
 class VGAITrainConfig:
@@ -47,39 +46,40 @@ class VGAITrainConfig:
         seed: seed of the training initial conditions, sampling and weights.
         synthetic_share: stage 1 shows this share of its states with synthetic relative velocities
             (``state_estimation.synthetic_velocities``), from 0.01 to 1.5 m/s: the expert's own late
-            states have almost none to learn small motions from. Our choice: 0.5 (notebook 06,
-            section 6; 0 in the book's VGAIs before the consensus round).
+            states have almost none to learn small motions from. Paper: 0; the book's recipe: 0.5
+            (notebook 06, section 6).
         motion_features: F_m, the CNN's last F_m features made odd in the motion channels
             (``VisualCNN``): exactly 0 when nothing moves relative to the drone, so a swarm moving
-            as one reads as such. None (default): F // 3, the share of velocities among the 6 exact
-            features (2 of 6), when the CNN sees a motion frame in the "difference" mode (which an
-            explicit F_m > 0 needs), else 0; 0: the paper's plain CNN.
+            as one reads as such. 0 (default): the paper's plain CNN. None (the book's recipe):
+            F // 3, the share of velocities among the 6 exact features (2 of 6), when the CNN sees a
+            motion frame in the "difference" mode (which an explicit F_m > 0 needs), else 0.
         aux_weight: stage 3 adds this times the state-estimation loss of stage 1 (the aux head on
             every image of the window against the exact local features), so that joint training
             keeps the CNN's features readable as the swarm's relative velocities (0: the action
-            loss alone, eq. 10). Our choice: 5, which makes the two terms of similar size at the
+            loss alone, eq. 10, the paper's). The book's recipe: 5, which makes the two terms of similar size at the
             start of stage 3 (action L1 about 3 m/s², state-estimation L1 about 0.2, standardised).
 
         flight_steps: steps of every stored flight (0: cfg.T, the paper's episode of 2 s). Stages 1
             and 2 read the first cfg.T steps of each; stage 3 draws its windows over the whole
             flight, so that the drifting a learner does after 2 s is labelled with the expert's
-            braking (issue 24, hypothesis 1).
+            braking (an ablation of notebook 06: it did not make VGAI flock).
         joint_early_share: stage 3's own early_share (0: early_share's), for its windows only, so that
-            stages 1 and 2 (and the cached stage 1) stay as they were (hypothesis 1).
+            stages 1 and 2 (and the cached stage 1) stay as they were.
         learner_swarms: the share of each DAgger round's swarms that the learner flies alone (p = 1
             at every step), the others under the paper's mixture (p_learner): the states the
             learner's own drifting leads to, late in a flight, labelled with the expert's braking.
-            Our choice: 0.5, the one change that made VGAI flock (notebook 06: three training seeds,
-            each with velocity variance at 5 s below the book's threshold; 0: the paper's mixture alone).
+            The book's recipe: 0.5, the one change that made VGAI flock (notebook 06: three training
+            seeds, each with velocity variance at 5 s below the book's threshold; 0: the paper's mixture alone).
         mlp_on_exact: stage 2 fits the MLP on the CNN's features corrected through the aux head
             (``exact_through_aux``) so that they read as the exact local features, as the modular
-            vision pilot's MLP learned its response on exact features (hypothesis 2).
+            vision pilot's MLP learned its response on exact features (an ablation of notebook 06).
         anchor_weight: stage 3 adds this times the action loss of the MLP on those corrected
             features (the CNN's features with their estimation error removed), which keeps the
-            MLP's response anchored to the exact-feature fit (hypothesis 2).
+            MLP's response anchored to the exact-feature fit (an ablation of notebook 06).
 
-    The optional fields are stored by ``to_dict`` only when not 0: files written before they existed
-    had none (their meaning then: 0), so those checkpoints and table cells keep their identity.
+    ``to_dict`` stores the fields of ``BOOK_ADDITIONS`` only when switched on (not 0), so that the
+    paper's VGAI is written with the paper's fields alone, and a file or table cell is named by what
+    its training changed.
     """
 
     F: int = 24
@@ -102,12 +102,12 @@ class VGAITrainConfig:
     early_steps: int = 50
     early_share: float = 0.75
     seed: int = 0
-    synthetic_share: float = 0.5
-    motion_features: Optional[int] = None
-    aux_weight: float = 5.0
+    synthetic_share: float = 0.0
+    motion_features: Optional[int] = 0
+    aux_weight: float = 0.0
     flight_steps: int = 0
     joint_early_share: float = 0.0
-    learner_swarms: float = 0.5
+    learner_swarms: float = 0.0
     mlp_on_exact: bool = False
     anchor_weight: float = 0.0
 
@@ -128,15 +128,15 @@ class VGAITrainConfig:
 
     def to_dict(self) -> dict:
         d = config_dict(self)
-        for optional in OPTIONAL_FIELDS:  # absent from older files
-            if d[optional] == 0:
-                del d[optional]
+        for addition in BOOK_ADDITIONS:
+            if d[addition] == 0:
+                del d[addition]
         return d
 
     @staticmethod
     def from_dict(d: dict) -> "VGAITrainConfig":
-        """The inverse of ``to_dict`` (the optional fields, absent when 0, come back as 0)."""
-        d = {**{k: 0 for k in OPTIONAL_FIELDS}, **d}
+        """The inverse of ``to_dict`` (the book's additions, absent when 0, come back as 0)."""
+        d = {**{k: 0 for k in BOOK_ADDITIONS}, **d}
         d["vision"] = VisionConfig.from_dict(d["vision"])
         d["hidden"], d["cnn_widths"] = tuple(d["hidden"]), tuple(d["cnn_widths"])
         return VGAITrainConfig(**d)
@@ -144,8 +144,26 @@ class VGAITrainConfig:
     def new_model(self) -> VGAIModel:
         """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""
         C, H, W = self.vision.image_shape()
-        return VGAIModel(VisualCNN(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
+        return VGAIModel(visual_cnn(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
                          AggregationMLP(self.K, self.F, self.hidden))
+
+
+PAPER = VGAITrainConfig()
+"""The paper's VGAI: F = 24, K - 1 = 3, the plain CNN, the L1 action loss, DAgger's mixture."""
+
+BOOK_RECIPE = {"motion_features": None, "synthetic_share": 0.5, "aux_weight": 5.0, "learner_swarms": 0.5}
+"""The book's changes to the paper's VGAI, each measured in notebook 06's ablation: odd motion features
+(F_m = F // 3), synthetic relative velocities in stage 1, the state-estimation loss kept in stage 3,
+half of DAgger's swarms flown by the learner alone."""
+
+
+def book_recipe(**fields) -> VGAITrainConfig:
+    """The book's VGAI with ``fields`` changed (e.g. ``book_recipe(F=6)``): ``PAPER`` + ``BOOK_RECIPE``."""
+    return VGAITrainConfig(**{**BOOK_RECIPE, **fields})
+
+
+BOOK = book_recipe()
+"""The book's VGAI at the paper's default F = 24, K - 1 = 3."""
 
 
 def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator, share: float = 0.0) -> torch.Tensor:

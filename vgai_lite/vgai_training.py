@@ -37,9 +37,7 @@ from .graphs import adjacency, gso
 from .imitation import EpisodeStore, fit_l1, validation_record
 from .learned_controllers import VGAIController
 from .models import VGAIModel
-# stage 1 and the run's configuration live in their own modules; notebooks 05 and 06 import these
-# names from here too
-from .state_estimation import estimator_quality, fit_state_estimator, train_state_estimator  # noqa: F401
+from .state_estimation import fit_state_estimator
 from .vgai_config import VGAITrainConfig, sample_times
 from .vision import stored_images
 

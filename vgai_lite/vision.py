@@ -42,9 +42,8 @@ class VisionConfig:
 
     Attributes:
         view: "egocentric" (the 360° panorama, default) or "topdown".
-        render: RenderConfig of the views. Default: 4 cameras of 12 x 32 (a 12 x 128 panorama, gray and
-            depth channels): half the rows of the renderer's default, as the bodies sit on the
-            horizon and the depth channel already gives their distance; it halves the CNN's cost.
+        render: RenderConfig of the views. Default: the renderer's, 4 cameras of 12 x 32 (a 12 x 128
+            panorama, gray and depth channels).
         motion_gap: g, the frame the current one is paired with is g steps old (0: a single frame).
             A single frame shows positions only; the expert's action is dominated by velocity
             alignment, visible only across frames.
@@ -58,7 +57,7 @@ class VisionConfig:
     """
 
     view: str = "egocentric"
-    render: RenderConfig = RenderConfig(view_height=12, view_width=32)
+    render: RenderConfig = RenderConfig()
     motion_gap: int = 5
     motion_mode: str = "difference"
     prehistory: bool = True

@@ -16,8 +16,7 @@ from matplotlib import animation
 from matplotlib.collections import LineCollection
 
 from .config import FlockConfig
-from .consensus import velocity_variance
-from .flocking import Trajectory
+from .flocking import Trajectory, velocity_variance
 from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
 
 
@@ -25,7 +24,7 @@ PALETTE = {"expert": "black", "centralized": "black", "DAGNN": "tab:blue", "VGAI
            "Local": "tab:green", "pilot": "tab:purple", "plain CNN": "tab:brown"}
 """One colour per controller across the whole book (every figure of notebooks 01-07 takes it from
 here): the expert black, DAGNN blue, VGAI orange, the local heuristic green, the modular vision
-pilot purple, last round's plain-CNN VGAI brown. ``controller_color`` finds a name's colour by the first of these words it contains."""
+pilot purple, the paper's recipe (the plain CNN) brown. ``controller_color`` finds a name's colour by the first of these words it contains."""
 
 
 def controller_color(name: str, default: Optional[str] = None) -> Optional[str]:

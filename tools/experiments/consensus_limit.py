@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from vgai_lite import FlockConfig, load_controller, rollout, sample_initial_state  # noqa: E402
 from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
-from vgai_lite.consensus import velocity_variance  # noqa: E402
+from vgai_lite.flocking import velocity_variance  # noqa: E402
 
 TIMES = (2.0, 5.0)
 

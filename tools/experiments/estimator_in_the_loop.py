@@ -6,7 +6,7 @@ The shipped DAGNN (data/dagnn/dagnn_K4.pt, trained on the 6 exact local features
 velocity features replaced by noise, and with all 6 features replaced by a visual state
 estimator's estimate from each drone's own images (``VisionDAGNN``): the estimator shipped with
 notebook 05 (data/vgai/estimator_motion.pt, the plain CNN) and one whose velocity estimates are odd
-in the motion channels (``VisualCNN(motion_features=8)``) trained with half of its states shown
+in the motion channels (``OddMotionCNN(motion_features=8)``) trained with half of its states shown
 with synthetic relative velocities (data/experiments/estimator_odd8_synth0.5.pt, trained here when
 missing, about 6 minutes). For each: the flocking figures (velocity variance at 0.5-5 s, 10 held-out
 500-step flights; for the odd estimator also the relative cost with safety and flocking figures on

@@ -33,8 +33,8 @@ from vgai_lite import FlockConfig, VGAITrainConfig, load_controller, relative_co
 from vgai_lite.book import DATA_DIR  # noqa: E402
 from vgai_lite.checkpoints import save_controller  # noqa: E402
 from vgai_lite.imitation import EpisodeStore  # noqa: E402
-from vgai_lite.perturbations import ImageNoise, perturbed  # noqa: E402
-from vgai_lite.robustness import RobustnessConfig  # noqa: E402
+from vgai_lite.lab.perturbations import ImageNoise, perturbed  # noqa: E402
+from vgai_lite.lab.robustness import RobustnessConfig  # noqa: E402
 from vgai_lite.vgai_training import joint_round  # noqa: E402
 
 ROUNDS = 2

@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from vgai_lite.book import DATA_DIR  # noqa: E402
-from vgai_lite.reproduce import ReproduceConfig, run  # noqa: E402
+from vgai_lite.lab.reproduce import ReproduceConfig, run  # noqa: E402
 
 
 def timed(rc, out, threads, ray=None):

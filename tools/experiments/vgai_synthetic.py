@@ -22,7 +22,7 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, consensus, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
-from vgai_lite.runs import VGAI_RUNS  # noqa: E402
+from vgai_lite.lab.runs import VGAI_RUNS  # noqa: E402
 
 
 def main(argv=None) -> int:

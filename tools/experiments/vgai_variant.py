@@ -6,7 +6,7 @@ Trains the book's default VGAI (``runs.VGAI_RUNS["vgai_F24"]``) with the given c
 ``data/experiments/NAME.json``: the relative cost on ``--episodes`` validation episodes (seed
 book.VALIDATION_SEED: variants are choices, so they are compared on validation episodes, never on
 the test episodes) with the safety figures and the flocking figures (velocity variance at 2 and
-5 s, connectivity at 5 s), and the record's provenance (``vgai_lite.provenance``). The checkpoint goes to ``data/experiments/NAME.pt`` (not a shipped
+5 s, connectivity at 5 s), and the record's provenance (``vgai_lite.lab.provenance``). The checkpoint goes to ``data/experiments/NAME.pt`` (not a shipped
 model), so a record and its controller can be checked against each other.
 
     python tools/experiments/vgai_variant.py --name vgai_F24_plain --evaluate data/experiments/vgai_F24_plain.pt
@@ -31,8 +31,8 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
-from vgai_lite.provenance import Provenance  # noqa: E402
-from vgai_lite.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
+from vgai_lite.lab.provenance import Provenance  # noqa: E402
+from vgai_lite.lab.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
 
 
 def main(argv=None) -> int:

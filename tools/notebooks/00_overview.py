@@ -73,7 +73,7 @@ plt.show()
 # configuration objects, so it says what the code does:
 
 # %%
-from vgai_lite import paper_vs_book
+from vgai_lite.lab import paper_vs_book
 
 paper_vs_book.show()
 

@@ -36,7 +36,7 @@ from IPython.display import Markdown, display
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
 from vgai_lite.book import EVAL_SEED, QUICK, VALIDATION_SEED, pick, prose, threads
-from vgai_lite.paper import PAPER
+from vgai_lite.lab.paper import PAPER
 from vgai_lite.evaluate import CLOSE_CALLS, FLOCK_TIMES, FLOCKED_CONNECTED, FLOCKED_VARIANCE
 from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
@@ -423,7 +423,7 @@ def my_potential_gradient(r_ij, rho):
     ### END SOLUTION
 
 # %% [check ex01-1]
-from vgai_lite.exercises import check_potential_gradient
+from vgai_lite.lab.exercises import check_potential_gradient
 
 assert check_potential_gradient(my_potential_gradient)
 
@@ -440,7 +440,7 @@ def my_flocking_cost(v):
     ### END SOLUTION
 
 # %% [check ex01-2]
-from vgai_lite.exercises import check_flocking_cost
+from vgai_lite.lab.exercises import check_flocking_cost
 
 assert check_flocking_cost(my_flocking_cost)
 
@@ -480,6 +480,6 @@ prose("""## What we have, and what comes next
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("01");

@@ -231,7 +231,7 @@ def my_aggregation_sequence(X, S, K):
     ### END SOLUTION
 
 # %% [check ex02-1]
-from vgai_lite.exercises import check_aggregation_sequence
+from vgai_lite.lab.exercises import check_aggregation_sequence
 
 assert check_aggregation_sequence(my_aggregation_sequence)
 
@@ -255,7 +255,7 @@ def my_sym_gso(A):
     ### END SOLUTION
 
 # %% [check ex02-2]
-from vgai_lite.method_exercises import check_sym_gso
+from vgai_lite.lab.method_exercises import check_sym_gso
 
 assert check_sym_gso(my_sym_gso)
 
@@ -284,6 +284,6 @@ assert check_sym_gso(my_sym_gso)
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("02");

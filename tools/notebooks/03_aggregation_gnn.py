@@ -37,8 +37,8 @@ from vgai_lite.dagnn_training import DAGNNTrainConfig, train_dagnn
 from vgai_lite.imitation import load_or_train
 from vgai_lite.learned_controllers import DAGNNController
 from vgai_lite.models import AggregationMLP
-from vgai_lite.paper import PAPER
-from vgai_lite.runs import DAGNN_RUNS
+from vgai_lite.lab.paper import PAPER
+from vgai_lite.lab.runs import DAGNN_RUNS
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
@@ -261,9 +261,9 @@ for name, label in (("dagnn_K4", "DAgger, p = 0.33"), ("dagnn_K4_no_dagger", "ex
 display(Markdown("| training data | relative cost (95% CI) | episodes < 0.05 m |\n|---|---|---|\n" + "\n".join(rows)))
 
 # %%
-from vgai_lite import findings
+from vgai_lite.lab import findings
 
-prose("By the book's one criterion (notebook 07, `vgai_lite/findings.py`: a cost is lower than another when their 95% "
+prose("By the book's one criterion (notebook 07, `vgai_lite/lab/findings.py`: a cost is lower than another when their 95% "
       "intervals do not overlap), {verdict} The DAGNN's mistakes are small, so the states it visits are not far from the "
       "expert's; notebook 06 shows a learner whose mistakes are not small, where DAgger's data decides everything.",
       verdict={-1: "DAgger lowers the cost here.", 0: "this budget cannot tell the two apart: the intervals overlap.",
@@ -377,7 +377,7 @@ def my_local_features(r, v, R):
     ### END SOLUTION
 
 # %% [check ex03-1]
-from vgai_lite.exercises import check_local_features
+from vgai_lite.lab.exercises import check_local_features
 
 assert check_local_features(my_local_features)
 
@@ -405,7 +405,7 @@ def my_dagger_round(data, learner, expert, mix, step, r0, v0, steps):
     ### END SOLUTION
 
 # %% [check ex03-2]
-from vgai_lite.method_exercises import check_dagger_round
+from vgai_lite.lab.method_exercises import check_dagger_round
 
 assert check_dagger_round(my_dagger_round)
 
@@ -436,6 +436,6 @@ assert check_dagger_round(my_dagger_round)
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("03");

@@ -40,7 +40,7 @@ from vgai_lite.viz import animate_views, animation_image, draw_swarm
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
-rcfg = VisionConfig().render  # exactly what VGAI's CNN sees (RenderConfig()'s own default draws more rows)
+rcfg = VisionConfig().render  # exactly what VGAI's CNN sees (RenderConfig(), 12 x 32 per camera)
 r0, v0 = sample_initial_state(cfg, pick(20, 3), torch.Generator().manual_seed(EVAL_SEED))
 print("quick mode" if QUICK else "full mode")
 print(rcfg)
@@ -49,7 +49,7 @@ print(rcfg)
 # The rows of notebook 00's paper-vs-book table that concern this notebook (read from the configs):
 
 # %%
-from vgai_lite import paper_vs_book
+from vgai_lite.lab import paper_vs_book
 
 paper_vs_book.show(["simulator", "observation", "motion"])
 
@@ -272,7 +272,7 @@ animation_image(anim)
 # with longer timing):
 
 # %%
-from vgai_lite.benchmark import run_render
+from vgai_lite.lab.benchmark import run_render
 
 for row in run_render(swarms=pick(64, 4), min_seconds=pick(1.0, 0.1)):
     print(f"{row['renderer']:32s} {row['agent_images_per_s']:10,.0f} agent-images/s")
@@ -324,7 +324,7 @@ def my_pinhole(theta, d, rcfg):
     ### END SOLUTION
 
 # %% [check ex04-1]
-from vgai_lite.exercises import check_pinhole
+from vgai_lite.lab.exercises import check_pinhole
 
 assert check_pinhole(my_pinhole)
 
@@ -353,6 +353,6 @@ assert check_pinhole(my_pinhole)
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("04");

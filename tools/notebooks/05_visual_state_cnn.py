@@ -31,8 +31,8 @@ from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose, threads
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.models import VisualCNN
 from vgai_lite.render import CAMERAS
-from vgai_lite.runs import book_estimator
-from vgai_lite.vgai_training import estimator_quality, train_state_estimator
+from vgai_lite.lab.runs import book_estimator
+from vgai_lite.state_estimation import estimator_quality, train_state_estimator
 from vgai_lite.vision import VisionConfig, stored_images
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
@@ -44,7 +44,7 @@ print(vision)
 # The rows of notebook 00's paper-vs-book table that concern this notebook (read from the configs):
 
 # %%
-from vgai_lite import paper_vs_book
+from vgai_lite.lab import paper_vs_book
 
 paper_vs_book.show(["observation", "motion", "CNN", "training"])
 
@@ -264,7 +264,7 @@ class MyResidualBlock(nn.Module):
         ### END SOLUTION
 
 # %% [check ex05-1]
-from vgai_lite.method_exercises import check_residual_block
+from vgai_lite.lab.method_exercises import check_residual_block
 
 assert check_residual_block(MyResidualBlock)
 
@@ -296,7 +296,7 @@ class MyCircularConv(nn.Module):
         ### END SOLUTION
 
 # %% [check ex05-2]
-from vgai_lite.experiment_exercises import check_circular_conv
+from vgai_lite.lab.experiment_exercises import check_circular_conv
 
 assert check_circular_conv(MyCircularConv)
 
@@ -315,7 +315,7 @@ from vgai_lite.imitation import EpisodeStore
 from vgai_lite.models import ResidualBlock
 from vgai_lite.state_estimation import fit_state_estimator
 from vgai_lite.vgai_config import VGAITrainConfig
-from vgai_lite.exercises import RESULTS
+from vgai_lite.lab.exercises import RESULTS
 
 if not RESULTS.get("05.2"):
     print("The experiment runs once MyCircularConv above passes its check (exercise 05.2).")
@@ -368,6 +368,9 @@ else:
 # variant over a few seeds (and at the full length of stage 1) and switches only if circular
 # padding is better on average by more than the spread between seeds. It costs nothing at run time
 # (the same convolutions, padded differently), so a switch needs only that evidence.
+
+# %% [markdown]
+# ## Key takeaways
 #
 # * The CNN pools rows only, so every column's bearing survives to its last layers.
 # * Regressing the DAGNN's exact features (visual state estimation) shows what the CNN can see: relative positions well; relative velocities from the first step with two frames, and from a single frame only once the formation betrays them; small ones poorly either way.
@@ -389,6 +392,6 @@ else:
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("05");

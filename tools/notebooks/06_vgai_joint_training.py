@@ -36,9 +36,10 @@ from IPython.display import Markdown, display
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, QUICK, TEST_SEED, pick, prose
 from vgai_lite.evaluate import as_safe_as_expert, flocked
-from vgai_lite.paper import PAPER
-from vgai_lite.runs import training_minutes
-from vgai_lite.vgai_training import VGAITrainConfig, train_vgai
+from vgai_lite.lab.paper import PAPER
+from vgai_lite.lab.runs import training_minutes
+from vgai_lite.vgai_config import BOOK, BOOK_RECIPE, book_recipe
+from vgai_lite.vgai_training import train_vgai
 from vgai_lite.viz import PALETTE
 
 cfg = FlockConfig()
@@ -87,10 +88,12 @@ plt.show()
 # The CNN's last $F/3$ features are odd in the motion channels (`motion_features`). These four
 # changes to the paper's recipe are what make VGAI flock; section 6 explains each one and measures
 # what it buys. Every knob lives in one configuration object, `VGAITrainConfig`, whose defaults are
-# the book's recipe:
+# the paper's VGAI (`PAPER`); the book's recipe is the preset `BOOK`, the paper's with these four
+# changes (`BOOK_RECIPE`; `book_recipe(F=6)` is the book's recipe at F = 6):
 
 # %%
-print(VGAITrainConfig())
+print(BOOK_RECIPE)
+print(BOOK)
 
 # %% [markdown]
 # The book ships the trained controller (`data/vgai/vgai_F24.pt`, the training seed chosen in
@@ -102,7 +105,7 @@ if QUICK:
     from vgai_lite.render import RenderConfig
     from vgai_lite.vision import VisionConfig
 
-    tiny = VGAITrainConfig(F=6, K=2, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8,
+    tiny = book_recipe(F=6, K=2, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8,
                            vision=VisionConfig(render=RenderConfig(view_height=8, view_width=16)),
                            expert_episodes=1, dagger_rounds=1, episodes_per_round=2, warm_steps=2,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=1)
@@ -202,7 +205,7 @@ prose("A swarm that sees only images and talks to its neighbours lands between t
 
 # %%
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE
-from vgai_lite.reproduce import load_results
+from vgai_lite.lab.reproduce import load_results
 
 results = load_results()
 table_F = results["tables"]["F"]
@@ -230,12 +233,12 @@ display(Markdown(f"| F | VGAI relative cost (95% CI), {c['episodes']} episodes o
 
 # %% [markdown]
 # The paper finds that VGAI improves with $F$ and that even $F = 6$, as many numbers as the DAGNN's
-# exact features, flocks. The book states every such finding by one criterion (`vgai_lite/findings.py`):
+# exact features, flocks. The book states every such finding by one criterion (`vgai_lite/lab/findings.py`):
 # a cost is lower than another when their 95 % intervals do not overlap, and a trend holds when
 # every step of it is such a difference. By that criterion:
 
 # %%
-from vgai_lite import findings
+from vgai_lite.lab import findings
 
 recs_F = [{"relative_cost_mean": c["relative_cost_mean"], "relative_cost_mean_ci95": c["ci95"]} for c in cells.values()]
 prose("{claim}{caveat}", claim=findings.sentence("VGAI's cost falls as F grows (F = 6 → 12 → 24)",
@@ -338,7 +341,7 @@ prose("What each step bought, on these episodes:\n\n" + "\n".join(lines) + "\n\n
 # A drone's motion channels are $D_i = 5\,(I_i(t) - I_i(t-g))$; when every drone moves alike, every
 # $D_i = 0$, and if the neighbours' relative velocities all flip sign, $D_i$ flips sign too (to
 # first order). So the velocity features should be *odd* in $D$ and the position features *even*.
-# `VisualCNN(motion_features=F_m)` builds this in: it runs the same trunk $\psi$ on $[I, D]$ and on
+# `OddMotionCNN(..., motion_features=F_m)` builds this in: it runs the same trunk $\psi$ on $[I, D]$ and on
 # $[I, -D]$ and keeps
 #
 # $$x^{even} = \tfrac12\big(\psi(I, D) + \psi(I, -D)\big), \qquad x^{odd} = \tfrac12\big(\psi(I, D) - \psi(I, -D)\big)$$
@@ -497,7 +500,7 @@ def my_dagger_mix(u_learner, u_expert, p, generator):
     ### END SOLUTION
 
 # %% [check ex06-1]
-from vgai_lite.method_exercises import check_dagger_mix
+from vgai_lite.lab.method_exercises import check_dagger_mix
 
 assert check_dagger_mix(my_dagger_mix)
 
@@ -531,7 +534,7 @@ def my_bptt_loss(cnn, mlp, images, S, u_star):
     ### END SOLUTION
 
 # %% [check ex06-3]
-from vgai_lite.method_exercises import check_bptt_loss
+from vgai_lite.lab.method_exercises import check_bptt_loss
 
 assert check_bptt_loss(my_bptt_loss)
 
@@ -553,7 +556,7 @@ def my_odd_part(f, images):
     ### END SOLUTION
 
 # %% [check ex06-2]
-from vgai_lite.experiment_exercises import check_odd_part
+from vgai_lite.lab.experiment_exercises import check_odd_part
 
 assert check_odd_part(my_odd_part)
 
@@ -569,7 +572,7 @@ assert check_odd_part(my_odd_part)
 from vgai_lite.checkpoints import load_estimator
 from vgai_lite.features import local_features
 from vgai_lite.vision import stored_images
-from vgai_lite.exercises import RESULTS
+from vgai_lite.lab.exercises import RESULTS
 
 if not RESULTS.get("06.2"):
     print("The experiment runs once my_odd_part above passes its check (exercise 06.2).")
@@ -639,6 +642,6 @@ else:
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("06");

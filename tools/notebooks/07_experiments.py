@@ -41,8 +41,8 @@ from vgai_lite import ExpertController, FlockConfig, LocalController, relative_c
 from vgai_lite.book import DATA_DIR, ROOT, TEST_SEED, pick, prose
 from vgai_lite.evaluate import as_safe_as_expert
 from vgai_lite.graphs import adjacency
-from vgai_lite import findings
-from vgai_lite.reproduce import PAPER, TABLES, load_results
+from vgai_lite.lab import findings
+from vgai_lite.lab.reproduce import PAPER, TABLES, load_results
 from vgai_lite.viz import PALETTE, controller_color
 
 RERUN = False  # True: run `python -m vgai_lite reproduce` first (reuses what is computed; see above)
@@ -180,7 +180,7 @@ for pair in (("F", "K"), ("v_init", "R"), ("N",)):
 # %% [markdown]
 # ## The paper's findings, checked against our numbers
 #
-# Each line is computed from the tables above by one criterion (`vgai_lite/findings.py`): a cost is
+# Each line is computed from the tables above by one criterion (`vgai_lite/lab/findings.py`): a cost is
 # lower than another when their intervals do not overlap (the 95 % bootstrap interval over episodes
 # for a row of one training; mean ± 1.96 × spread / √seeds for the DAGNN rows, three training seeds),
 # and a trend holds when every step of it is such a difference. "Cannot tell" means the differences
@@ -367,7 +367,7 @@ def my_variance_at(v, Ts, seconds):
     ### END SOLUTION
 
 # %% [check ex07-1]
-from vgai_lite.experiment_exercises import check_variance_at
+from vgai_lite.lab.experiment_exercises import check_variance_at
 
 assert check_variance_at(my_variance_at)
 
@@ -379,7 +379,7 @@ assert check_variance_at(my_variance_at)
 
 # %%
 from vgai_lite import load_controller
-from vgai_lite.exercises import RESULTS
+from vgai_lite.lab.exercises import RESULTS
 
 if not RESULTS.get("07.1"):
     print("The experiment runs once my_variance_at above passes its check (exercise 07.1).")
@@ -585,6 +585,6 @@ display(Markdown("\n".join(bullets)))
 # the same checks: `python -m vgai_lite grade`, see the README).
 
 # %%
-from vgai_lite.exercises import score
+from vgai_lite.lab.exercises import score
 
 score("07");

@@ -15,7 +15,7 @@
 #
 # **Learning objectives.** After this notebook you can say which states make the flocking
 # equations blow up and how the library guards them; wrap a learned controller in a perturbed world
-# (`vgai_lite.perturbations`); read a degradation curve; explain why VGAI's two-frame motion input
+# (`vgai_lite.lab.perturbations`); read a degradation curve; explain why VGAI's two-frame motion input
 # makes it fragile to pixel noise, and what lost and late messages do to each controller; and
 # measure whether a cure works.
 
@@ -31,8 +31,8 @@ from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
 from vgai_lite.config import DISTANCE_FLOOR
 from vgai_lite.controllers import expert_control
 from vgai_lite.flocking import NonFiniteStateError
-from vgai_lite.perturbations import Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, World, perturbed
-from vgai_lite import robustness
+from vgai_lite.lab.perturbations import Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, World, perturbed
+from vgai_lite.lab import robustness
 from vgai_lite.vision import MOTION_SCALE
 from vgai_lite.viz import PALETTE, controller_color
 
@@ -358,7 +358,7 @@ d_delay = robustness.find(results, "DAGNN", (("delay", 1),))
 dead = robustness.find(results, "VGAI", (("dead_camera", 1),))
 blur = robustness.find(results, "VGAI", (("blur", 1.0),))
 pos_big = robustness.find(results, "DAGNN", (("position_noise", 0.2),))
-from vgai_lite import findings
+from vgai_lite.lab import findings
 
 SPLIT = 0.2
 """A drop in the share of connected episodes this large (20 points) is what this sweep calls a split: with

@@ -21,9 +21,9 @@ from IPython.display import Markdown, display
 
 from vgai_lite.book import DATA_DIR, TEST_SEED, prose
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, as_safe_as_expert, flocked
-from vgai_lite.paper import PAPER
-from vgai_lite.reproduce import load_results
-from vgai_lite.runs import DAGNN_RUNS, VGAI_RUNS, training_minutes
+from vgai_lite.lab.paper import PAPER
+from vgai_lite.lab.reproduce import load_results
+from vgai_lite.lab.runs import DAGNN_RUNS, VGAI_RUNS, training_minutes
 
 
 def load(rel):
@@ -147,7 +147,7 @@ choice = load("vgai/seeds/choice.json")
 seed_minutes = [training_minutes(load(f"vgai/seeds/{n}.json")) for n in choice["candidates"]]
 n75 = results["tables"]["N"]["rows"]["VGAI"]["75"]
 n75_flocked = n75["velocity_variance_median"]["5s"] <= FLOCKED_VARIANCE and n75["share_connected_at_end"] >= FLOCKED_CONNECTED
-from vgai_lite import robustness
+from vgai_lite.lab import robustness
 
 rob = robustness.load()
 rob_current = robustness.find(rob, "VGAI").get("checkpoint") == robustness._file_hash(robustness.CONTROLLERS["VGAI"])

@@ -13,7 +13,7 @@ import json
 from IPython.display import Markdown, display
 
 from vgai_lite.book import DATA_DIR, prose
-from vgai_lite.reproduce import load_results
+from vgai_lite.lab.reproduce import load_results
 
 results = load_results()  # the committed full run: data/results/results.json
 
@@ -21,7 +21,7 @@ results = load_results()  # the committed full run: data/results/results.json
 # ## Past one machine
 #
 # A full reproduction with three training seeds per VGAI row is many hours on a laptop. The same
-# command runs its trainings and cells as [Ray](https://docs.ray.io) tasks (`vgai_lite/ray_runner.py`):
+# command runs its trainings and cells as [Ray](https://docs.ray.io) tasks (`vgai_lite/lab/ray_runner.py`):
 #
 # ```bash
 # pip install -r requirements-cluster.txt                  # Ray, an optional group
@@ -40,7 +40,7 @@ results = load_results()  # the committed full run: data/results/results.json
 #
 # **Measured on this machine, and projected.** `python tools/experiments/ray_quick.py` times the quick
 # reproduction (every table in miniature, from scratch) serially and on a local Ray instance of two
-# CPUs; `vgai_lite.ray_runner.projected_hours` projects the full reproduction on M machines of two
+# CPUs; `vgai_lite.lab.ray_runner.projected_hours` projects the full reproduction on M machines of two
 # cores from the times recorded in this run's cells (each model's training time from its record,
 # each cell's evaluation time), with three training seeds per VGAI row. The projection is the larger
 # of the work spread evenly over the machines and the longest chain that must run in order (the three
@@ -49,7 +49,7 @@ results = load_results()  # the committed full run: data/results/results.json
 # with one thread (README, training times), so the projection errs on the slow side.
 
 # %%
-from vgai_lite.ray_runner import projected_hours
+from vgai_lite.lab.ray_runner import projected_hours
 
 rq = json.loads((DATA_DIR / "experiments" / "ray_quick.json").read_text())
 prose("The quick run, alone on this {cpus}-core machine (`{cmd}`): **{s2:.0f} s** serially with two torch "

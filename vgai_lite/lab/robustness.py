@@ -24,11 +24,11 @@ from typing import Optional, Union
 import torch
 from tqdm.auto import tqdm
 
-from .book import DATA_DIR, EVAL_SEED
-from .checkpoints import config_hash, load_controller
-from .config import FlockConfig
-from .controllers import LocalController
-from .evaluate import FLOCK_TIMES, relative_cost
+from ..book import DATA_DIR, EVAL_SEED
+from ..checkpoints import config_hash, load_controller
+from ..config import FlockConfig
+from ..controllers import LocalController
+from ..evaluate import FLOCK_TIMES, relative_cost
 from .perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
                             perturbed)
 
@@ -45,7 +45,7 @@ APPLIES_TO = {"links": ("DAGNN", "VGAI"), "delay": ("DAGNN", "VGAI"), "image_noi
 
 
 TARGETS = {"links_p": 0.2, "connected": 0.9, "image_noise_sigma": 0.05, "image_noise_ratio": 1.2}
-"""What VGAI was asked to survive (issue 15), set before the sweep: with a share ``links_p`` of its
+"""What VGAI should survive, set before the sweep was flown: with a share ``links_p`` of its
 messages lost, a cost below the Local heuristic's and the swarm connected at the end in at least
 ``connected`` of episodes; with pixel noise ``image_noise_sigma``, a cost at most ``image_noise_ratio``
 times its clean cost."""
@@ -69,7 +69,7 @@ class RobustnessConfig:
     Attributes:
         perturbations: (name, sizes) pairs, each flown alone from the clean controller; sizes are the
             perturbation's parameter (p, sigma in pixel values or pixels or metres, steps of delay).
-            The issue asks for p = 0 to 0.5 and sigma = 0 to 0.2 (size 0 is the clean flight); VGAI's
+            The sweep spans p = 0 to 0.5 and sigma = 0 to 0.2 (size 0 is the clean flight); VGAI's
             pixel-noise curve stops at 0.1 and its blur at one pixel to keep the sweep near half an
             hour (a VGAI cell is minutes of flying on two cores; the DAGNN's position noise costs
             seconds and goes to 0.2).

@@ -16,15 +16,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
-from .book import DATA_DIR, ROOT
-from .checkpoints import config_hash, is_finished_with, load_controller
-from .config import FlockConfig
-from .controllers import LocalController
-from .dagnn_training import train_dagnn
-from .evaluate import FLOCK_TIMES, relative_cost
-from .imitation import load_or_train
+from ..book import DATA_DIR, ROOT
+from ..checkpoints import config_hash, is_finished_with, load_controller
+from ..config import FlockConfig
+from ..controllers import LocalController
+from ..dagnn_training import train_dagnn
+from ..evaluate import FLOCK_TIMES, relative_cost
+from ..imitation import load_or_train
 from .runs import DAGNN_RUNS, VGAI_RUNS, VGAI_SEED_RUNS
-from .vgai_training import train_vgai
+from ..vgai_training import train_vgai
 
 
 @dataclass(frozen=True)

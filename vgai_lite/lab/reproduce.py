@@ -42,21 +42,20 @@ from typing import Optional, Union
 import torch
 from tqdm.auto import tqdm
 
-from .book import DATA_DIR, ROOT, TEST_SEED
-from .config import FlockConfig
-from .dagnn_training import DAGNNTrainConfig
+from ..book import DATA_DIR, ROOT, TEST_SEED
+from ..config import FlockConfig
+from ..dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
 from .runs import VGAI_RUNS
 from .ray_runner import run_jobs
 from .table_cells import ModelSpec, evaluate_cell, model_path
-from .vgai_config import VGAITrainConfig
+from ..vgai_config import VGAITrainConfig, book_recipe
 
 @dataclass(frozen=True)
 class ReproduceConfig:
     """What a reproduction run does. The committed data/results/results.json is the defaults'
-    (``python -m vgai_lite reproduce``), flying the book's shipped VGAIs (notebook 06's recipe); its
-    provenance lists the earlier invocations (a from-scratch run, ``--retrain --seeds 1``, and an
-    ``--extras`` run, both with last round's VGAI recipe, whose cells stay in data/results/cells/).
+    (``python -m vgai_lite reproduce``), flying the book's shipped VGAIs; its provenance lists every
+    invocation that computed its cells (data/results/cells/).
 
     Attributes:
         episodes: held-out episodes per cell (N' <= 75); ``episodes_large`` for N' >= 100, where a
@@ -128,11 +127,11 @@ def _book_vgai(F: int, K: int, seed: int) -> VGAITrainConfig:
     a table flies the shipped model whatever recipe it was trained with (each cell's record names its
     training configuration); the book's recipe for any other."""
     shipped = [t for t in VGAI_RUNS.values() if (t.F, t.K, t.seed) == (F, K, seed)]
-    return shipped[0] if shipped else VGAITrainConfig(F=F, K=K, seed=seed)
+    return shipped[0] if shipped else book_recipe(F=F, K=K, seed=seed)
 
 
 def _vgai(rc, F=24, K=4, seed=0, **cfg_changes) -> ModelSpec:
-    t = VGAITrainConfig(F=F, K=K, seed=seed) if cfg_changes else _book_vgai(F, K, seed)
+    t = book_recipe(F=F, K=K, seed=seed) if cfg_changes else _book_vgai(F, K, seed)
     return ModelSpec("vgai", _base_cfg(rc, **cfg_changes), _quick_vgai(t) if rc.quick else t,
                      _name(f"vgai_F{F}_K{K}", seed, cfg_changes))
 
@@ -256,8 +255,8 @@ def _aggregate(records: list[dict]) -> dict:
            "expert_share_below_0.05m": first["expert_share_below_0.05m"],
            "cells": [r["key"] for r in records]}
     trained = [r["model"].get("train_config") for r in records if r["model"].get("kind") == "vgai"]
-    if trained:  # whether every VGAI of the cell was trained with the book's recipe (VGAITrainConfig's defaults)
-        book = [VGAITrainConfig(F=t["F"], K=t["K"], seed=t["seed"]).to_dict() for t in trained]
+    if trained:  # whether every VGAI of the cell was trained with the book's recipe (``book_recipe``)
+        book = [book_recipe(F=t["F"], K=t["K"], seed=t["seed"]).to_dict() for t in trained]
         out["book_recipe"] = all(json.dumps(t, sort_keys=True) == json.dumps(b, sort_keys=True)  # tuples as lists
                                  for t, b in zip(trained, book))
     if all("velocity_variance_median" in r for r in records):  # did it flock: median over training seeds

@@ -13,17 +13,17 @@ import time
 import numpy as np
 import torch
 
-from .config import FlockConfig
-from .controllers import expert_control
-from .evaluate import relative_cost
-from .flocking import sample_initial_state, step
-from .imitation import EpisodeStore
-from .learned_controllers import VGAIController
-from .physics import raycast_depth
-from .render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
-from .state_estimation import fit_state_estimator
-from .vgai_config import VGAITrainConfig
-from .vgai_training import bptt_loss
+from ..config import FlockConfig
+from ..controllers import expert_control
+from ..evaluate import relative_cost
+from ..flocking import sample_initial_state, step
+from ..imitation import EpisodeStore
+from ..learned_controllers import VGAIController
+from ..physics import raycast_depth
+from ..render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
+from ..state_estimation import fit_state_estimator
+from ..vgai_config import BOOK
+from ..vgai_training import bptt_loss
 
 
 def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
@@ -108,9 +108,9 @@ def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=N
 
 def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     """Seconds per gradient step of VGAI's stage 1 (visual state estimation) and stage 3 (joint
-    K-step BPTT), and per evaluation episode, at the default VGAITrainConfig; projects the time of
+    K-step BPTT), and per evaluation episode, at the book's VGAI (``BOOK``); projects the time of
     a full default training from them (flight collection and validation included)."""
-    cfg, tcfg = FlockConfig(), VGAITrainConfig()
+    cfg, tcfg = FlockConfig(), BOOK
     gen = torch.Generator().manual_seed(0)
     r0, v0 = sample_initial_state(cfg, episodes, gen)
     start = time.perf_counter()
@@ -146,7 +146,7 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
 def main(args=None) -> None:
     if args is not None and getattr(args, "vgai", False):
         out = run_vgai_training()
-        print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, default VGAITrainConfig")
+        print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, the book's VGAI (BOOK)")
         print(f"stage 1 step (8 swarm states x 50 images): {out['stage1_step_s']:.3f} s")
         print(f"joint BPTT step (4 windows x 4 steps x 50 images): {out['joint_step_s']:.3f} s")
         print(f"one evaluation episode (VGAI + expert, 200 steps, N = 50): {out['eval_episode_s']:.2f} s")

@@ -15,7 +15,7 @@ from typing import Callable
 
 import torch
 
-from .consensus import velocity_variance
+from ..flocking import velocity_variance
 from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
 
 

@@ -27,7 +27,7 @@ from typing import Optional, Union
 
 import torch
 
-from .book import ROOT
+from ..book import ROOT
 
 
 def sha256(path: Union[str, Path]) -> str:

@@ -27,11 +27,11 @@ from typing import Optional
 
 from tqdm.auto import tqdm
 
-from .checkpoints import config_hash
-from .config import FlockConfig
+from ..checkpoints import config_hash
+from ..config import FlockConfig
 from .table_cells import cell_path, evaluate_cell, obtain
-from .vgai_config import VGAITrainConfig
-from .vgai_training import stage1_identity
+from ..vgai_config import VGAITrainConfig
+from ..vgai_training import stage1_identity
 
 INSTALL = "pip install -r requirements-cluster.txt"
 
@@ -75,7 +75,7 @@ def run_jobs(jobs: list, rc, out: Path, address: Optional[str] = None, cpus: Opt
 
     if not isinstance(threads, int) or threads < 1:
         raise ValueError(f"threads (torch threads and CPUs per task) must be a positive integer, got {threads!r}")
-    root = str(Path(__file__).resolve().parent.parent)
+    root = str(Path(__file__).resolve().parents[2])  # the folder holding vgai_lite/
     env = {"env_vars": {"PYTHONPATH": root + os.pathsep + os.environ.get("PYTHONPATH", "")}}
     if address is None:
         ray.init(num_cpus=cpus, include_dashboard=False, log_to_driver=False, runtime_env=env)

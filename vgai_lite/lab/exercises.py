@@ -17,13 +17,13 @@ from typing import Callable
 
 import torch
 
-from .aggregation import aggregation_sequence
-from .config import FlockConfig
-from .controllers import potential_gradient
-from .features import local_features
-from .flocking import flocking_cost
-from .graphs import adjacency, gso
-from .render import RenderConfig, bearing_to_column
+from ..aggregation import aggregation_sequence
+from ..config import FlockConfig
+from ..controllers import potential_gradient
+from ..features import local_features
+from ..flocking import flocking_cost
+from ..graphs import adjacency, gso
+from ..render import RenderConfig, bearing_to_column
 
 
 @dataclass

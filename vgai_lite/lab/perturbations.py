@@ -23,7 +23,7 @@ Every draw comes from the wrapper's seed: a rollout is reproducible, and a pertu
 instant the frame was taken, so a frame seen again g steps later (the motion input) carries the
 same noise, as a real frame would.
 
-Our choices where the issue and the paper are silent: the noise is clipped to [0, 1] because a
+Our choices where the paper is silent: the noise is clipped to [0, 1] because a
 camera's pixels saturate; links drop per direction (a lost message is one radio packet); the
 exact features stay exact except for PositionNoise, because they model the drone's own sensing.
 """
@@ -36,7 +36,7 @@ from typing import Optional
 import torch
 import torch.nn.functional as F_
 
-from .flocking import check_state
+from ..flocking import check_state
 
 
 def _check(value, name: str, low: float, high: float = math.inf) -> float:

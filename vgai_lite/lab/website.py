@@ -31,7 +31,7 @@ from typing import Optional, Union
 
 import nbformat
 
-from .book import ROOT
+from ..book import ROOT
 from .course import make_student_copies
 
 INSTALL = "pip install -r requirements-site.txt"
@@ -50,7 +50,7 @@ def check_installed() -> None:
                          "the book itself does not need it)")
 
 
-CONF = '''# Written by vgai_lite.website: the Sphinx configuration of the book's static site.
+CONF = '''# Written by vgai_lite.lab.website: the Sphinx configuration of the book's static site.
 project = "vgai-lite"
 author = "the vgai-lite authors"
 copyright = "the vgai-lite authors"

@@ -18,7 +18,7 @@ The exercise cells carry nbgrader's cell metadata (``tools/build_notebooks.py``)
 on the book as it is: ``nbgrader_course`` lays the notebooks out as an nbgrader course (one
 assignment per notebook), where ``nbgrader generate_assignment`` makes the student version and
 ``nbgrader autograde`` scores a hand-in with the same points as ``grade_notebook``. ``grade_notebook``
-executes a notebook in quick mode, collects what each exercise check (``vgai_lite.exercises``)
+executes a notebook in quick mode, collects what each exercise check (``vgai_lite.lab.exercises``)
 reported, and returns (and writes) a score per exercise as JSON.
 
     python -m vgai_lite student-copies --out student/
@@ -38,7 +38,7 @@ from typing import Optional, Union
 import nbformat
 from nbclient import NotebookClient
 
-from .book import QUICK_ENV, ROOT
+from ..book import QUICK_ENV, ROOT
 from .exercises import EXERCISES, GRADE_FILE_ENV, exercises_of
 
 BEGIN = "### BEGIN SOLUTION"
@@ -181,10 +181,10 @@ def nbgrader_course(out: Union[str, Path], source: Optional[Union[str, Path]] = 
 
 def is_score_cell(source: str) -> bool:
     """Whether a code cell is a graded notebook's closing cell, which imports ``score`` and prints the
-    notebook's score (``from vgai_lite.exercises import score`` then ``score("NN");``). The test suite
+    notebook's score (``from vgai_lite.lab.exercises import score`` then ``score("NN");``). The test suite
     compares its output with the committed full marks (conftest.py)."""
     lines = [l.strip() for l in source.strip().splitlines() if l.strip()]
-    return (len(lines) == 2 and lines[0] == "from vgai_lite.exercises import score"
+    return (len(lines) == 2 and lines[0] == "from vgai_lite.lab.exercises import score"
             and re.fullmatch(r'score\("\d\d"\);', lines[1]) is not None)
 
 

@@ -9,17 +9,17 @@ from __future__ import annotations
 
 from typing import Optional, Sequence
 
-from .config import FlockConfig
-from .dagnn_training import DAGNNTrainConfig
-from .graphs import DEFAULT_GSO
-from .render import CAMERAS
-from .vgai_config import VGAITrainConfig
-from .vision import MOTION_SCALE, VisionConfig
+from ..config import FlockConfig
+from ..dagnn_training import DAGNNTrainConfig
+from ..graphs import DEFAULT_GSO
+from ..render import CAMERAS
+from ..vgai_config import BOOK
+from ..vision import MOTION_SCALE, VisionConfig
 
 
 def _rows() -> dict:
     """topic -> (the paper, the book, why / where), the book's entries from the defaults."""
-    cfg, vis, tv, td = FlockConfig(), VisionConfig(), VGAITrainConfig(), DAGNNTrainConfig()
+    cfg, vis, tv, td = FlockConfig(), VisionConfig(), BOOK, DAGNNTrainConfig()
     rc = vis.render
     C, H, W = vis.image_shape()
     return {

@@ -16,17 +16,17 @@ import shutil
 from pathlib import Path
 from typing import Optional, Union
 
-from .book import DATA_DIR, EVAL_SEED, SELECTION_SEED, VALIDATION_SEED
-from .checkpoints import is_finished_with, load_estimator, save_estimator
-from .config import FlockConfig
-from .dagnn_training import DAGNNTrainConfig, train_dagnn
-from .evaluate import relative_cost
-from .imitation import load_or_train
+from ..book import DATA_DIR, EVAL_SEED, SELECTION_SEED, VALIDATION_SEED
+from ..checkpoints import is_finished_with, load_estimator, save_estimator
+from ..config import FlockConfig
+from ..dagnn_training import DAGNNTrainConfig, train_dagnn
+from ..evaluate import relative_cost
+from ..imitation import load_or_train
 from .provenance import Provenance, sha256
-from .state_estimation import estimator_quality, train_state_estimator
-from .vgai_config import PLAIN_RECIPE, VGAITrainConfig
-from .vgai_training import train_vgai
-from .vision import VisionConfig
+from ..state_estimation import estimator_quality, train_state_estimator
+from ..vgai_config import VGAITrainConfig, book_recipe
+from ..vgai_training import train_vgai
+from ..vision import VisionConfig
 
 DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
     "dagnn_K4": DAGNNTrainConfig(),                          # the default: K - 1 = 3 exchanges
@@ -44,7 +44,7 @@ VGAI_SEEDS = 3
 """Training seeds of the default VGAI the book ships (``train-vgai --seeds``; about 50 minutes apiece
 beside another training, one thread each)."""
 
-VGAI_SEED_RUNS: dict[str, VGAITrainConfig] = {f"vgai_F24_seed{s}": VGAITrainConfig(seed=s) for s in range(VGAI_SEEDS)}
+VGAI_SEED_RUNS: dict[str, VGAITrainConfig] = {f"vgai_F24_seed{s}": book_recipe(seed=s) for s in range(VGAI_SEEDS)}
 """Trainings of the default VGAI that differ only in the training seed, in data/vgai/seeds/: how far
 apart trainings land, and the pool the book's vgai_F24 is chosen from (``choose_seed``)."""
 
@@ -54,22 +54,21 @@ on the selection episodes (book.SELECTION_SEED, never the evaluation seed), as c
 in data/vgai/seeds/choice.json by ``python -m vgai_lite train-vgai --choose`` (a test checks the two agree)."""
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
-    "vgai_F24": VGAITrainConfig(seed=VGAI_F24_SEED),  # the paper's default: F = 24, K - 1 = 3, egocentric
+    "vgai_F24": book_recipe(seed=VGAI_F24_SEED),  # the paper's default: F = 24, K - 1 = 3, egocentric
     # Tables 1a and 1b, the book's recipe:
-    "vgai_F6": VGAITrainConfig(F=6),     # as many features as the DAGNN's (F_m = 2)
-    "vgai_K2": VGAITrainConfig(K=2),     # K - 1 = 1 exchange (stage 1 shared with vgai_F24's)
+    "vgai_F6": book_recipe(F=6),     # as many features as the DAGNN's (F_m = 2)
+    "vgai_K2": book_recipe(K=2),     # K - 1 = 1 exchange (stage 1 shared with vgai_F24's)
     # not yet retrained with the learner flying alone (learner_swarms=0.0: DAgger's mixture only):
-    "vgai_F12": VGAITrainConfig(F=12, learner_swarms=0.0),   # F_m = 4
-    "vgai_K3": VGAITrainConfig(K=3, learner_swarms=0.0),     # K - 1 = 2 exchanges
+    "vgai_F12": book_recipe(F=12, learner_swarms=0.0),   # F_m = 4
+    "vgai_K3": book_recipe(K=3, learner_swarms=0.0),     # K - 1 = 2 exchanges
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
 PLAIN_RUNS: dict[str, VGAITrainConfig] = {
-    f"{name}_plain": VGAITrainConfig(F=t.F, K=t.K, **PLAIN_RECIPE) for name, t in VGAI_RUNS.items()
-    if t.motion_features}
-"""The configurations retrained with the default recipe, in last round's plain-CNN recipe
-(``PLAIN_RECIPE``): their records (and vgai_F24_plain's checkpoint) are kept in data/experiments/,
-for notebook 06's table of what was tried and notebook 07's two trainings of one configuration."""
+    f"{name}_plain": VGAITrainConfig(F=t.F, K=t.K) for name, t in VGAI_RUNS.items() if t.motion_features}
+"""The book's configurations trained with the paper's recipe (``VGAITrainConfig``'s defaults): their
+records (and vgai_F24_plain's checkpoint) are kept in data/experiments/, for notebook 06's table of
+what was tried and notebook 07's two trainings of one configuration."""
 
 STAGE1_CACHE = DATA_DIR / "results" / "stage1"
 """Where ``book_vgai`` keeps (and finds) stage 1 of a VGAI training: runs that differ only in K share
@@ -86,7 +85,7 @@ def write_evaluation(path: Union[str, Path], result, cfg: FlockConfig, extra: Op
                      provenance: Optional[dict] = None) -> Path:
     """Save a RelativeCost's summary with its configuration as JSON (what the notebooks display),
     its first episodes one by one (``RelativeCost.pinned``) and, when given, its provenance
-    (``vgai_lite.provenance``)."""
+    (``vgai_lite.lab.provenance``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     out = {"config": dataclasses.asdict(cfg), **result.summary(), "pinned": result.pinned(), **(extra or {})}

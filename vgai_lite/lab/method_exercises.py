@@ -15,10 +15,10 @@ import torch
 import torch.nn.functional as nnf
 from torch import nn
 
-from .aggregation import aggregation_sequence
+from ..aggregation import aggregation_sequence
 from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
-from .graphs import gso
-from .imitation import dagger_mix
+from ..graphs import gso
+from ..imitation import dagger_mix
 
 
 # ---------------------------------------------------------------------------------------------
