@@ -58,9 +58,8 @@ VGAI_RUNS: dict[str, VGAITrainConfig] = {
     # Tables 1a and 1b, the book's recipe:
     "vgai_F6": book_recipe(F=6),     # as many features as the DAGNN's (F_m = 2)
     "vgai_K2": book_recipe(K=2),     # K - 1 = 1 exchange (stage 1 shared with vgai_F24's)
+    "vgai_F12": book_recipe(F=12),   # F_m = 4
     "vgai_K3": book_recipe(K=3),     # K - 1 = 2 exchanges (the same)
-    # not yet retrained with the learner flying alone (learner_swarms=0.0: DAgger's mixture only):
-    "vgai_F12": book_recipe(F=12, learner_swarms=0.0),   # F_m = 4
 }
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
