@@ -248,13 +248,13 @@ plt.show()
 # (`p_learner = 0.33`) and once on the expert's trajectories only (`p_learner = 0`, behaviour cloning):
 
 # %%
-def book_dagnn(name):
+def shipped_dagnn(name):
     return load_or_train(DATA_DIR / "dagnn" / f"{name}.pt", cfg, DAGNN_RUNS[name], train_dagnn, progress=False)[0]
 
 
 rows, dagger_cells = [], []
 for name, label in (("dagnn_K4", "DAgger, p = 0.33"), ("dagnn_K4_no_dagger", "expert data only")):
-    res = relative_cost(book_dagnn(name), cfg, episodes=EPISODES, seed=EVAL_SEED)
+    res = relative_cost(shipped_dagnn(name), cfg, episodes=EPISODES, seed=EVAL_SEED)
     lo, hi = res.mean_ratio_ci
     dagger_cells.append(res.summary())
     rows.append(f"| {label} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {res.safety.share_below(0.05):.0%} |")
@@ -280,7 +280,7 @@ prose("By the book's one criterion (notebook 07, `vgai_lite/lab/findings.py`: a 
 rows, ks, costs, k_cells = [], [], [], []
 paper_k = {1: 1.94, 2: 1.82, 3: 1.70}
 for K in (1, 2, 3, 4):
-    res = relative_cost(book_dagnn(f"dagnn_K{K}"), cfg, episodes=EPISODES, seed=EVAL_SEED)
+    res = relative_cost(shipped_dagnn(f"dagnn_K{K}"), cfg, episodes=EPISODES, seed=EVAL_SEED)
     lo, hi = res.mean_ratio_ci
     ks.append(K - 1), costs.append(res.mean_ratio), k_cells.append(res.summary())
     rows.append(f"| {K - 1} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {paper_k.get(K - 1, '—')} | "
@@ -310,7 +310,7 @@ prose("{first} {rest}",
 rows = []
 for name, label in (("dagnn_K4_sum", "adjacency (sum)"), ("dagnn_K4_mean", "row_normalized (mean)"),
                     ("dagnn_K4", "sym_normalized (default)")):
-    ctrl = book_dagnn(name)
+    ctrl = shipped_dagnn(name)
     cells = []
     for N in (50, 75, 100):
         c_N = cfg.replace(N=N, init_method="repair")

@@ -57,6 +57,11 @@ def _shipped_path(spec: ModelSpec) -> Optional[Path]:
     return None
 
 
+QUICK_VALIDATION_EPISODES = 2
+"""Validation episodes a quick run's training (short episodes, ``reproduce --quick``) logs after each
+round (a full run: 10); the log never chooses anything, so fewer only save the test suite time."""
+
+
 def model_path(spec: ModelSpec, out: Path) -> Path:
     return _shipped_path(spec) or out / "models" / f"{spec.name}_{spec.key()}.pt"
 
@@ -73,11 +78,13 @@ def obtain(spec: ModelSpec, out: Path, progress: bool = False,
     trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
     start = time.perf_counter()
     if trained:  # otherwise the checkpoint is ready; evaluate_cell loads it in the flight configuration
+        # the validation after each round is logged, never used to choose: a quick run logs fewer
+        val = {"validation_episodes": QUICK_VALIDATION_EPISODES} if spec.cfg.T < 200 else {}
         if spec.kind == "dagnn":
-            load_or_train(path, spec.cfg, spec.tcfg, train_dagnn, retrain=retrain, progress=progress)
+            load_or_train(path, spec.cfg, spec.tcfg, train_dagnn, retrain=retrain, progress=progress, **val)
         else:
             load_or_train(path, spec.cfg, spec.tcfg, train_vgai, retrain=retrain, progress=progress,
-                          stage1_cache=out / "stage1")
+                          stage1_cache=out / "stage1", **val)
     return path, time.perf_counter() - start, trained
 
 
