@@ -157,7 +157,10 @@ def _tables(results: dict) -> str:
             f"{rc['episodes_large']} at N' >= 100; DAGNN rows over {rc['seeds']} training seeds, VGAI rows "
             f"{rc['vgai_seeds']} training each): its last invocation computed {last['cells_computed_now']} cells and "
             f"trained {last['models_trained_now']} models in {last['wall_seconds'] / 60:.0f} min; "
-            f"{prov['compute_seconds']['cells']} cells in all.")
+            f"{prov['compute_seconds']['cells']} cells in all, whose evaluations took "
+            f"{prov['compute_seconds']['evaluation'] / 60:.0f} min as each cell recorded when it was computed "
+            f"(the invocations that computed them, with their commands and threads, are listed in "
+            f"`data/results/results.json`).")
     ray_file = ROOT / "data" / "experiments" / "ray_quick.json"
     if ray_file.is_file():
         rq = json.loads(ray_file.read_text())

@@ -25,10 +25,11 @@ import torch
 from tqdm.auto import tqdm
 
 from ..book import DATA_DIR, EVAL_SEED
-from ..checkpoints import config_hash, load_controller
+from ..checkpoints import load_controller
 from ..config import FlockConfig
 from ..controllers import LocalController
 from ..evaluate import FLOCK_TIMES, relative_cost
+from .table_cells import cached_cell
 from .perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
                             perturbed)
 
@@ -166,20 +167,16 @@ def evaluate(cell: dict, rc: RobustnessConfig, out: Path) -> dict:
     ident = {"controller": cell["controller"], "perturbations": [list(p) for p in cell["perturbations"]],
              "checkpoint": _file_hash(CONTROLLERS[cell["controller"]]) if cell["controller"] in CONTROLLERS else None,
              "flight": cfg.to_dict(), "episodes": episodes, "seed": rc.seed, "flock_times": list(times)}
-    key = config_hash(ident)
-    path = out / "cells" / f"{key}.json"
-    if path.is_file():
-        return {**json.loads(path.read_text()), "computed_now": False}
-    controller = controller_for(cell["controller"], cfg, cell["perturbations"], rc.seed)
-    start = time.perf_counter()
-    res = relative_cost(controller, cfg, episodes=episodes, seed=rc.seed, flock_times=times,
-                        name=getattr(controller, "name", cell["controller"]))
-    record = {"key": key, **res.summary(), **ident, "name": res.name,
-              "min_distance": round(float(res.safety.min_distance.min()), 4),
-              "eval_seconds": round(time.perf_counter() - start, 1)}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(record, indent=1) + "\n")
-    return {**record, "computed_now": True}
+
+    def fly(key: str) -> dict:
+        controller = controller_for(cell["controller"], cfg, cell["perturbations"], rc.seed)
+        start = time.perf_counter()
+        res = relative_cost(controller, cfg, episodes=episodes, seed=rc.seed, flock_times=times,
+                            name=getattr(controller, "name", cell["controller"]))
+        return {"key": key, **res.summary(), **ident, "name": res.name,
+                "min_distance": round(float(res.safety.min_distance.min()), 4),
+                "eval_seconds": round(time.perf_counter() - start, 1)}
+    return cached_cell(out, ident, fly)
 
 
 def run(rc: RobustnessConfig = RobustnessConfig(), out: Optional[Union[str, Path]] = None,

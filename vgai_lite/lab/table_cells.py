@@ -14,7 +14,7 @@ import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Optional
 
 from ..book import DATA_DIR, ROOT
 from ..checkpoints import config_hash, is_finished_with, load_controller
@@ -105,10 +105,11 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
     train the controller anew first. ``obtained``: what ``obtain`` returned when it ran elsewhere
     (a training task of ``ray_runner``), so that the record says the same as a serial run's."""
     ident = cell_identity(spec, flight, episodes, seed)
-    key = config_hash(ident)
-    path = out / "cells" / f"{key}.json"
-    if path.is_file() and not fresh:
-        return {**json.loads(path.read_text()), "computed_now": False}
+    return cached_cell(out, ident, lambda key: _fly_cell(key, ident, spec, flight, episodes, seed, out, progress,
+                                                         retrain, obtained), fresh=fresh)
+
+
+def _fly_cell(key, ident, spec, flight, episodes, seed, out, progress, retrain, obtained) -> dict:
     ckpt, train_seconds, trained = obtained or obtain(spec, out, progress, retrain=retrain)
     # fly it in this column's configuration (trained in spec.cfg)
     controller = LocalController(flight) if ckpt is None else load_controller(ckpt, cfg=flight)
@@ -127,6 +128,19 @@ def evaluate_cell(spec: ModelSpec, flight: FlockConfig, episodes: int, seed: int
                              if ckpt is not None and _inside(ckpt, ROOT) else (str(ckpt) if ckpt else None))}
     if spec.kind != "local":
         record["train_seconds_recorded"] = round(controller.meta.get("history", {}).get("seconds", 0.0), 1)
+    return record
+
+
+def cached_cell(out: Path, ident: dict, compute: Callable[[str], dict], fresh: bool = False) -> dict:
+    """The record of the cell ``ident`` (a dict of everything that defines it), with ``computed_now``:
+    read from OUT/cells/KEY.json (KEY = ``config_hash(ident)``) if an earlier run computed it, unless
+    ``fresh``; otherwise ``compute(KEY)``, written there before the next cell starts. The tables'
+    cells and the robustness sweep's (``robustness.evaluate``) are cached by this one rule."""
+    key = config_hash(ident)
+    path = Path(out) / "cells" / f"{key}.json"
+    if path.is_file() and not fresh:
+        return {**json.loads(path.read_text()), "computed_now": False}
+    record = compute(key)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(record, indent=1) + "\n")
     return {**record, "computed_now": True}
