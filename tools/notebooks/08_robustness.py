@@ -33,6 +33,7 @@ from vgai_lite.controllers import expert_control
 from vgai_lite.flocking import NonFiniteStateError
 from vgai_lite.lab.perturbations import Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, World, perturbed
 from vgai_lite.lab import robustness
+from vgai_lite.lab.runs import training_minutes
 from vgai_lite.vision import MOTION_SCALE
 from vgai_lite.viz import PALETTE, controller_color
 
@@ -319,7 +320,8 @@ verdict = ("It meets the target." if cured else
            "What we believe limits it: the CNN's motion features were learned in stage 1 from clean frames only, and a "
            "fine-tune of the joint training, with a fresh optimiser at the full learning rate, unsettles them before it "
            "can learn to ignore noise. The cure to try next is noise from the start: stage 1 and every round of a full "
-           "training with noisy frames (one training, about twenty minutes on this machine).")
+           "training with noisy frames (one training as long as the shipped VGAI's, {:.0f} min on this machine by its "
+           "record).".format(training_minutes(json.loads((DATA_DIR / "vgai" / "vgai_F24.json").read_text()))))
 prose("Training on noisy frames took {m:.0f} min of fine-tuning (torch threads: {th}; the control ran beside it). With noise of 0.05 the noise-trained VGAI "
       "costs {a:.2f} against the shipped one's {n:.2f}; on clean frames it costs {ac:.2f} (shipped {sc:.2f}).{control} "
       "{verdict}",
