@@ -97,8 +97,8 @@ print(BOOK)
 
 # %% [markdown]
 # The book ships the trained controller (`data/vgai/vgai_F24.pt`, the training seed chosen in
-# section 6); regenerate it with `python -m vgai_lite train-vgai vgai_F24 --retrain` (about 50
-# minutes on two cores). In quick mode we also run a miniature training:
+# section 6); regenerate it with `python -m vgai_lite train-vgai vgai_F24 --retrain` (its record's
+# training time is printed below). In quick mode we also run a miniature training:
 
 # %%
 if QUICK:
@@ -248,9 +248,20 @@ prose("{claim}{caveat}", claim=findings.sentence("VGAI's cost falls as F grows (
               "the paper makes."))
 
 # %% [markdown]
-# The training column is the wall time each training recorded on this 2-core machine (stages 1 to
-# 3; each trained beside another training, one thread each, which is slower than alone).
-#
+# The training column is the wall time each training recorded on this 2-core machine, stages 1 to
+# 3. How each ran, from its record's provenance (torch threads, and the machine's mean load average
+# while it trained: about 1 or 2 is a training alone, more is a training beside another job):
+
+# %%
+def how_it_ran(name):
+    p = json.loads((DATA_DIR / "vgai" / f"{name}.json").read_text()).get("provenance", {}).get("training")
+    return (f"{name}: not recorded (trained before records carried provenance)" if p is None else
+            f"{name}: {p['torch_threads']} thread(s), load {p['load_average_mean']:.1f}")
+
+
+prose("{runs}.", runs="; ".join(how_it_ran(f"vgai_F{F}") for F in table_F["columns"]))
+
+# %% [markdown]
 # ## 5. A flight
 #
 # The same initial conditions under the expert, the DAGNN, the book's VGAI, the paper's recipe for
