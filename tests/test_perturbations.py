@@ -9,8 +9,8 @@ from vgai_lite.checkpoints import load_controller
 from vgai_lite.config import FlockConfig
 from vgai_lite.controllers import LocalController
 from vgai_lite.flocking import rollout, sample_initial_state
-from vgai_lite.lab.perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
-                                     World, perturbed)
+from vgai_lite.lab.perturbations import (Blur, DeadCamera, DelayedBuffer, DroppedLinks, ImageNoise, MessageDelay,
+                                         PositionNoise, World, perturbed)
 from vgai_lite.lab.robustness import RobustnessConfig, curve, find, plan, run
 
 CFG = FlockConfig()
@@ -69,13 +69,13 @@ def test_wrappers_compose_and_refuse_what_cannot_reach_the_controller(pilots):
 def test_all_links_dropped_leaves_only_the_agents_own_features(pilots, start):
     """p = 1: no message arrives, so every block of Z(t) but the first is zero (eq. 6 with S = 0)."""
     r, v = start
-    c = pilots["DAGNN"]
-    world = perturbed(c, DroppedLinks(1.0)).world
+    c = perturbed(pilots["DAGNN"], DroppedLinks(1.0))
     c.reset()
     for _ in range(4):
-        Z = c.observe(r, v, world)
+        c(r, v)
+    Z = c.buffer.Z
     assert Z[:, :, 1:].abs().max() == 0 and Z[:, :, 0].abs().max() > 0
-    world = perturbed(c, DroppedLinks(0.5), seed=4).world
+    world = perturbed(pilots["DAGNN"], DroppedLinks(0.5), seed=4).world
     A = torch.ones(200, 50, 50)
     assert abs(world.links(A).mean().item() - 0.5) < 0.01
 
@@ -86,9 +86,10 @@ def test_message_delay_shifts_the_neighbours_blocks_by_one_more_step():
     g = torch.Generator().manual_seed(0)
     X = [torch.randn(1, 3, 2, generator=g) for _ in range(5)]
     S = torch.rand(1, 3, 3, generator=g)
-    late, prompt = AggregationBuffer(3), AggregationBuffer(3)
+    late, prompt, none = DelayedBuffer(3, 1), AggregationBuffer(3), DelayedBuffer(3, 0)
     for t in range(5):
-        Zl, Zp = late.push(X[t], S, delay=1), prompt.push(X[t], S)
+        Zl, Zp, Z0 = late.push(X[t], S), prompt.push(X[t], S), none.push(X[t], S)
+    assert torch.equal(Z0, Zp)  # no delay is eq. 6
     assert torch.allclose(Zp[:, :, 1], S @ X[3]) and torch.allclose(Zp[:, :, 2], S @ S @ X[2])
     assert torch.allclose(Zl[:, :, 1], S @ X[2]) and torch.allclose(Zl[:, :, 2], S @ S @ X[0])
     assert torch.equal(Zl[:, :, 0], X[4])

@@ -28,45 +28,35 @@ def _check_K(K: int) -> None:
 class AggregationBuffer:
     """Step-by-step Z(t), as each agent builds it during a rollout.
 
-    The buffer keeps the last Z's; ``push(X, S)`` returns Z(t) = [X(t), S(t) Z_0(t-1), ..., S(t) Z_{K-2}(t-1)]
-    and keeps it for the next steps. ``push(X, S, delay=d)`` models messages that arrive d steps late:
-    the neighbours' blocks are those of Z(t-1-d) (zero before the episode), Z(t) = [X(t), S(t) Z_{0..K-2}(t-1-d)].
-    ``reset()`` forgets everything (call it when an episode starts).
+    The buffer keeps the last Z; ``push(X, S)`` returns Z(t) = [X(t), S(t) Z_0(t-1), ..., S(t) Z_{K-2}(t-1)]
+    and keeps it for the next step (zero before the episode's first). ``reset()`` forgets it (call it
+    when an episode starts).
     """
 
     def __init__(self, K: int):
         _check_K(K)
         self.K = K
-        self.history: list = []  # Z(t-1), Z(t-2), ... newest first, as many as a delay needs
-
-    @property
-    def Z(self) -> Optional[torch.Tensor]:
-        """Z(t-1), the last pushed, or None before the first push."""
-        return self.history[0] if self.history else None
+        self.Z: Optional[torch.Tensor] = None  # Z(t-1): the messages the neighbours sent last step
 
     def reset(self) -> None:
-        self.history = []
+        self.Z = None
 
-    def push(self, X: torch.Tensor, S: torch.Tensor, delay: int = 0) -> torch.Tensor:
+    def push(self, X: torch.Tensor, S: torch.Tensor) -> torch.Tensor:
         """X (B, N, F), S (B, N, N) at time t -> Z(t) (B, N, K, F)."""
         if X.ndim != 3 or S.shape != (X.shape[0], X.shape[1], X.shape[1]):
             raise ValueError(f"expected X (B, N, F) and S (B, N, N), got {tuple(X.shape)} and {tuple(S.shape)}")
-        if not isinstance(delay, int) or delay < 0:
-            raise ValueError(f"delay (extra steps a message takes) must be an integer >= 0, got {delay!r}")
         if self.Z is not None and self.Z.shape[:2] != X.shape[:2]:
             raise ValueError(f"the buffer holds {tuple(self.Z.shape[:2])} (B, N) but X is "
                              f"{tuple(X.shape[:2])}: call reset() between episodes of other sizes")
         blocks = [X]
         if self.K > 1:
-            old = self.history[delay] if len(self.history) > delay else None
-            prev = old[:, :, : self.K - 1] if old is not None else X.new_zeros(
+            prev = self.Z[:, :, : self.K - 1] if self.Z is not None else X.new_zeros(
                 X.shape[0], X.shape[1], self.K - 1, X.shape[2])
             # [S prev_k]_i = sum_j S_ij prev_k[j]: one exchange with the neighbours for every k
             shifted = torch.einsum("bij,bjkf->bikf", S, prev)
             blocks.append(shifted)
-        Z = torch.cat([blocks[0].unsqueeze(2)] + blocks[1:], dim=2)
-        self.history = [Z] + self.history[:delay]
-        return Z
+        self.Z = torch.cat([blocks[0].unsqueeze(2)] + blocks[1:], dim=2)
+        return self.Z
 
 
 def aggregation_sequence(X: torch.Tensor, S: torch.Tensor, K: int) -> torch.Tensor:

@@ -9,9 +9,7 @@ Both follow the same three stages per step, and differ only in the first:
     u(t)  the action             saturate(NN_Theta(Z(t))), eqs. 7-8
 
 ``observe(r, v)`` runs the first two and returns Z(t); ``act(Z)`` the last. DAgger's data
-collection (``imitation.fly_dagger``) calls them apart to record Z(t). ``observe`` takes an optional
-``world`` (``perturbations.World``): what the world does to the camera frames, the measured
-positions and the exchanges (notebook 08); without one, the world is the training's.
+collection (``imitation.fly_dagger``) calls them apart to record Z(t).
 
 A call ``controller(r, v)`` runs in ``torch.inference_mode`` (its output carries no autograd graph)
 unless ``controller.gradients`` is set True; training builds its graphs from the models directly.
@@ -43,20 +41,14 @@ class _Learned:
     gradients = False
     """Set True to differentiate through ``controller(r, v)``; by default calls run in inference mode."""
 
-    def __call__(self, r: torch.Tensor, v: torch.Tensor, world=None) -> torch.Tensor:
+    def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
         with torch.inference_mode(not self.gradients):
-            return self.act(self.observe(r, v, world))
+            return self.act(self.observe(r, v))
 
-    def observe(self, r: torch.Tensor, v: torch.Tensor = None, world=None) -> torch.Tensor:
-        """One exchange: push X(t) (``features``) and S(t) into the buffer and return Z(t), (B, N, K, F).
-        With a ``world`` (notebook 08's perturbations), X(t) is measured in it and S(t) keeps only the
-        links that carried a message."""
-        A = adjacency(r, self.cfg.R)
-        if world is None:
-            S = gso(A, self.gso_kind)
-            return self.buffer.push(self.features(r, v), S)
-        S = gso(world.links(A), self.gso_kind)
-        return self.buffer.push(self.features(r, v, world), S, delay=world.delay)
+    def observe(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
+        """One exchange: push X(t) (``features``) and S(t) into the buffer and return Z(t), (B, N, K, F)."""
+        S = gso(adjacency(r, self.cfg.R), self.gso_kind)
+        return self.buffer.push(self.features(r, v), S)
 
 
 class DAGNNController(_Learned):
@@ -88,10 +80,9 @@ class DAGNNController(_Learned):
     def reset(self) -> None:
         self.buffer.reset()
 
-    def features(self, r: torch.Tensor, v: torch.Tensor, world=None) -> torch.Tensor:
-        """X(t), (B, N, 6): the exact local features (optionally signed-log transformed); with a
-        ``world``, from the positions as measured there."""
-        X = local_features(r if world is None else world.positions(r), v, self.cfg.R)
+    def features(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+        """X(t), (B, N, 6): the exact local features (optionally signed-log transformed)."""
+        X = local_features(r, v, self.cfg.R)
         return signed_log(X) if self.feature_transform == "signed_log" else X
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:
@@ -153,10 +144,10 @@ class VGAIController(_Learned):
             self.seen.pop(0)
         return self.seen[0]
 
-    def features(self, r: torch.Tensor, v: torch.Tensor = None, world=None) -> torch.Tensor:
-        """X(t) from the agents' images, (B, N, F); with a ``world``, through its cameras."""
+    def features(self, r: torch.Tensor, v: torch.Tensor = None, camera=None) -> torch.Tensor:
+        """X(t) from the agents' images, (B, N, F). ``camera(frame, lag)``: what the cameras do to
+        each raw frame before the CNN sees it (``vision.camera_input``); None: the training's cameras."""
         check_state(r)
-        camera = None if world is None else world.camera
         images = camera_input(self.vision, self.cfg, r, self._remember(r, v), camera)
         return self.model.features(images)
 

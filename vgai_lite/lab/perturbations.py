@@ -36,7 +36,9 @@ from typing import Optional
 import torch
 import torch.nn.functional as F_
 
+from ..aggregation import AggregationBuffer
 from ..flocking import check_state
+from ..graphs import adjacency, gso
 
 
 def _check(value, name: str, low: float, high: float = math.inf) -> float:
@@ -218,6 +220,27 @@ class World:
         return A
 
 
+class DelayedBuffer(AggregationBuffer):
+    """``AggregationBuffer`` whose neighbours' messages arrive ``delay`` steps late: Z(t) = [X(t),
+    S(t) Z_{0..K-2}(t-1-delay)], zero before the episode (``MessageDelay``; delay 0 is eq. 6)."""
+
+    def __init__(self, K: int, delay: int):
+        super().__init__(K)
+        self.delay = delay
+        self.sent: list = []  # Z(t-1), Z(t-2), ... newest first: the messages still on their way
+
+    def reset(self) -> None:
+        super().reset()
+        self.sent = []
+
+    def push(self, X: torch.Tensor, S: torch.Tensor) -> torch.Tensor:
+        # the messages that arrive now are the ones sent delay steps before the last
+        self.Z = self.sent[self.delay] if len(self.sent) > self.delay else None
+        Z = super().push(X, S)
+        self.sent = [Z] + self.sent[: self.delay]
+        return Z
+
+
 class Perturbed:
     """A learned controller flown in a perturbed world: a controller (``reset()``, ``u = c(r, v)``)."""
 
@@ -236,8 +259,9 @@ class Perturbed:
                 raise ValueError("DeadCamera needs the egocentric panorama of four cameras")
             if type(p).positions is not Perturbation.positions and vision is not None:
                 raise ValueError(f"{p!r} acts on the exact features' positions; VGAI sees only images")
-        self.controller = controller
+        self.controller, self.sees = controller, vision is not None
         self.world = World(perturbations, seed)
+        self.buffer = DelayedBuffer(controller.K, self.world.delay)  # the exchanges, as they arrive here
         self.name = f"{getattr(controller, 'name', 'controller')} + {', '.join(map(repr, perturbations)) or 'nothing'}"
 
     @property
@@ -251,11 +275,19 @@ class Perturbed:
     def reset(self) -> None:
         self.controller.reset()
         self.world.reset()
+        self.buffer.reset()
 
     def __call__(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+        """The controller's step (``learned_controllers._Learned.observe`` and ``act``) in this world: S(t)
+        keeps only the links that carried a message, X(t) is measured through the world's cameras
+        (VGAI) or positions (DAGNN), and the messages arrive as late as the world makes them."""
         check_state(r, v)
-        u = self.controller(r, v, self.world)
-        self.world.t += 1
+        c, w = self.controller, self.world
+        with torch.inference_mode(not c.gradients):
+            S = gso(w.links(adjacency(r, c.cfg.R)), c.gso_kind)
+            X = c.features(r, v, camera=w.camera) if self.sees else c.features(w.positions(r), v)
+            u = c.act(self.buffer.push(X, S))
+        w.t += 1
         return u
 
     def __repr__(self) -> str:
