@@ -133,10 +133,11 @@ def section() -> str:
            if any(_recipe(r) for r in vgai.values()) else
            " Every VGAI here is trained with the book's recipe (notebook 06, section 6)."),
         "",
-        f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. Every VGAI trained "
-        "beside another training, one thread each (stages 1-3, minutes): "
-        + ", ".join(f"seed {choice['candidates'][n]['training_seed']} {vg_minutes(r):.0f}" for n, r in seed_recs.items())
-        + "; " + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.0f}" for n, r in vgai.items() if n != "F24")
+        f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. The VGAIs, stages "
+        "1-3 in minutes, with the torch threads and the machine's mean load average while each trained (its record's "
+        "provenance: one thread at a load near 2 or above is a training that shared the two cores with another job): "
+        + ", ".join(f"seed {choice['candidates'][n]['training_seed']} {vg_minutes(r):.0f}{_how(r)}" for n, r in seed_recs.items())
+        + "; " + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.0f}{_how(r)}" for n, r in vgai.items() if n != "F24")
         + " (`runs.training_minutes`: a run that reused a cached first stage adds that stage's recorded time).",
         "",
         _tables(results),
@@ -144,6 +145,12 @@ def section() -> str:
         _robustness(),
     ]
     return "\n".join([BEGIN, *text, END])
+
+
+def _how(record: dict) -> str:
+    """How a training ran, from its record's provenance: " (1 thread, load 2.4)", or nothing if unrecorded."""
+    p = record.get("provenance", {}).get("training")
+    return "" if p is None else f" ({p['torch_threads']} thread{'s' if p['torch_threads'] > 1 else ''}, load {p['load_average_mean']:.1f})"
 
 
 def _tables(results: dict) -> str:
