@@ -225,7 +225,7 @@ for ax in axes:
     ax.set_xlabel(r"distance $\|r_{ij}\|$ [m]")
     ax.legend()
 axes[0].set_ylim(-2, 40), axes[0].set_title(f"potential, rho = {cfg.rho} m (grey line)")
-axes[0].set_ylabel(r"$U(\mathbf r_i, \mathbf r_j)$ of eq. 3")
+axes[0].set_ylabel(r"$U(r_i, r_j)$ of eq. 3")
 axes[1].set_ylabel(r"$-\partial U / \partial x_i$: eq. 2's term [m/s²]")
 axes[1].set_yscale("symlog", linthresh=1), axes[1].set_ylim(bottom=0), axes[1].set_title("repulsive acceleration (> 0 pushes apart)")
 plt.tight_layout()
