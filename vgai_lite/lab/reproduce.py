@@ -89,11 +89,9 @@ class ReproduceConfig:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
 
 
-QUICK_T = 30
-"""Steps per episode in quick mode (full: FlockConfig.T = 200)."""
-QUICK_TRAIN_N = 12
-"""Agents a quick run's VGAI trainings fly (full: FlockConfig.N = 50): rendering every agent's view is
-most of a VGAI training's cost. Its cells still fly the columns' N (any N: the controller is shared)."""
+QUICK_T, QUICK_TRAIN_N = 30, 12
+"""Quick mode: steps per episode (full: FlockConfig.T = 200), and agents in a VGAI training (full: N = 50;
+rendering their views is its cost; its cells still fly the columns' N)."""
 
 
 def _quick_dagnn(t: DAGNNTrainConfig) -> DAGNNTrainConfig:
@@ -134,8 +132,7 @@ def _book_vgai(F: int, K: int, seed: int) -> VGAITrainConfig:
 
 
 def _vgai(rc, F=24, K=4, seed=0, **cfg_changes) -> ModelSpec:
-    t = book_recipe(F=F, K=K, seed=seed) if cfg_changes else _book_vgai(F, K, seed)
-    cfg = _base_cfg(rc, **cfg_changes)
+    t, cfg = book_recipe(F=F, K=K, seed=seed) if cfg_changes else _book_vgai(F, K, seed), _base_cfg(rc, **cfg_changes)
     return ModelSpec("vgai", cfg.replace(N=QUICK_TRAIN_N) if rc.quick else cfg, _quick_vgai(t) if rc.quick else t,
                      _name(f"vgai_F{F}_K{K}", seed, cfg_changes))
 
