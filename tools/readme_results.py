@@ -20,7 +20,7 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.lab.reproduce import PAPER  # noqa: E402
-from vgai_lite.lab.runs import training_minutes  # noqa: E402
+from vgai_lite.lab.runs import how_trained, training_minutes  # noqa: E402
 from vgai_lite.book import TEST_SEED  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -148,9 +148,9 @@ def section() -> str:
 
 
 def _how(record: dict) -> str:
-    """How a training ran, from its record's provenance: " (1 thread, load 2.4)", or nothing if unrecorded."""
-    p = record.get("provenance", {}).get("training")
-    return "" if p is None else f" ({p['torch_threads']} thread{'s' if p['torch_threads'] > 1 else ''}, load {p['load_average_mean']:.1f})"
+    """" (1 thread, load 2.4)": how a training ran (``runs.how_trained``), or nothing if unrecorded."""
+    how = how_trained(record)
+    return "" if how is None else f" ({how})"
 
 
 def _tables(results: dict) -> str:

@@ -253,13 +253,10 @@ prose("{claim}{caveat}", claim=findings.sentence("VGAI's cost falls as F grows (
 # while it trained: about 1 or 2 is a training alone, more is a training beside another job):
 
 # %%
-def how_it_ran(name):
-    p = json.loads((DATA_DIR / "vgai" / f"{name}.json").read_text()).get("provenance", {}).get("training")
-    return (f"{name}: not recorded (trained before records carried provenance)" if p is None else
-            f"{name}: {p['torch_threads']} thread(s), load {p['load_average_mean']:.1f}")
+from vgai_lite.lab.runs import how_trained
 
-
-prose("{runs}.", runs="; ".join(how_it_ran(f"vgai_F{F}") for F in table_F["columns"]))
+hows = {F: how_trained(json.loads((DATA_DIR / "vgai" / f"vgai_F{F}.json").read_text())) for F in table_F["columns"]}
+prose("{runs}.", runs="; ".join(f"vgai_F{F}: {how or 'not recorded'}" for F, how in hows.items()))
 
 # %% [markdown]
 # ## 5. A flight

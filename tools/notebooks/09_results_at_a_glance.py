@@ -165,8 +165,8 @@ items = [
     f"* **Training time.** The book's recipe took {min(seed_minutes):.0f} to {max(seed_minutes):.0f} minutes per "
     "training seed on two cores, each beside another training at one thread; the two VGAIs of Table 2b's extra row, "
     "trained at two threads by `reproduce --extras --threads 2`, took " + " and ".join(
-        f"{json.loads((DATA_DIR / 'results' / 'cells' / (results['tables']['R']['rows']['VGAI (retrained)'][c]['cells'][0] + '.json')).read_text())['train_seconds_recorded'] / 60:.0f}"
-        for c in ("1.0", "2.0"))
+        f"{load(f'results/cells/{key}.json')['train_seconds_recorded'] / 60:.0f}"
+        for key in (results["tables"]["R"]["rows"]["VGAI (retrained)"][c]["cells"][0] for c in ("1.0", "2.0")))
     + " minutes. So each table cell is one training; the spread over training seeds of every VGAI cell is not measured.",
     "* **The paper's simulator.** AirSim's dynamics and cameras are not reproduced; the findings, not the numbers, "
     "are what should carry over.",

@@ -102,6 +102,15 @@ def training_minutes(record: dict) -> float:
     return (record["train_seconds"] + stage1) / 60
 
 
+def how_trained(record: dict) -> Optional[str]:
+    """How a training ran, from its record's provenance ("1 thread, load 2.4": torch threads and the
+    machine's mean load average while it trained), or None for a record written before provenance."""
+    p = record.get("provenance", {}).get("training")
+    if p is None:
+        return None
+    return f"{p['torch_threads']} thread{'s' if p['torch_threads'] > 1 else ''}, load {p['load_average_mean']:.1f}"
+
+
 def _check_name(name: str, runs: dict, kind: str) -> None:
     if name not in runs:
         raise ValueError(f"unknown run {name!r}; the book's {kind} runs are {sorted(runs)}")
