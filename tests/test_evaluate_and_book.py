@@ -186,6 +186,11 @@ def test_flocked_reads_the_variance_at_5_s_and_the_connectivity():
     assert not flocked({**rec, "share_connected_at_end": FLOCKED_CONNECTED - 0.02})
     with pytest.raises(ValueError, match="5 s"):
         flocked({"velocity_variance_median": {"2s": 0.0}, "share_connected_at_end": 1.0, "flocking_horizon_s": 2.0})
+    # a table cell carries no horizon: its flight ends at the last time its variance was read
+    cell = {k: v for k, v in rec.items() if k != "flocking_horizon_s"}
+    assert flocked(cell)
+    with pytest.raises(ValueError, match="5 s"):  # flown on to 10 s: connected at 10 s, not 5 s
+        flocked({**cell, "velocity_variance_median": {"2s": 0.0, "5s": 0.0, "10s": 0.0}})
 
 
 def test_threads_reads_its_variable_and_refuses_nonsense(monkeypatch):

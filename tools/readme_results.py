@@ -122,7 +122,7 @@ def section() -> str:
         "**Each shipped model's own record** (N = 50, R = 1.5 m, v_init = 3 m/s; relative cost = cost of eq. 1 over "
         "the centralized expert's on the same initial conditions). The VGAIs' records are their evaluations on the "
         "validation episodes, where the choice among training seeds is made; the DAGNNs' and Local's are on the "
-        "book's earlier held-out episodes (seed 2020), on which designs were also compared, so neither is a test:",
+        "book's working episodes (seed 2020, notebook 01), on which the chapters compare designs, so neither is a test:",
         "",
         *rows,
         "",
@@ -209,10 +209,13 @@ def _robustness() -> str:
             f"unperturbed {local['relative_cost_mean']:.2f}), connected at 5 s in {links['share_connected_at_end']:.0%} "
             f"of episodes; the DAGNN {_ci(dl)}. With pixel noise sigma = {T['image_noise_sigma']:g} VGAI costs "
             f"{_ci(noisy)}, {noisy['relative_cost_mean'] / clean['relative_cost_mean']:.2f}x its clean cost; trained two "
-            f"more rounds on noisy frames (`python tools/experiments/noise_augmentation.py`) {_ci(aug)}"
-            + (", no cure" if aug_clean["share_connected_at_end"] < FLOCKED_CONNECTED else "")
-            + f": on clean frames it then costs {_ci(aug_clean)} and is connected at 5 s in "
-            f"{aug_clean['share_connected_at_end']:.0%} of episodes.")
+            f"more rounds on noisy frames (`python tools/experiments/noise_augmentation.py`) {_ci(aug)}, "
+            + ("which meets" if aug["relative_cost_mean"] <= T["image_noise_ratio"] * clean["relative_cost_mean"]
+               else "which misses") + f" the target of {T['image_noise_ratio']:g}x the shipped VGAI's clean cost"
+            + f"; on clean frames it then costs {_ci(aug_clean)} and "
+            + ("flocks" if flocked(aug_clean) else "does not flock")
+            + f" (velocity variance at 5 s {aug_clean['velocity_variance_median']['5s']:.1e} m²/s², connected at 5 s in "
+            f"{aug_clean['share_connected_at_end']:.0%} of episodes).")
 
 
 def main() -> None:

@@ -35,10 +35,13 @@ FLOCKED_CONNECTED = 0.9
 
 
 def flocked(summary: dict) -> bool:
-    """Whether a record (``RelativeCost.summary()``) says the controller flocked: FLOCKED_VARIANCE
-    at 5 s and FLOCKED_CONNECTED. A record flown without the 5 s figures cannot say (ValueError)."""
+    """Whether a record (``RelativeCost.summary()``, or a table cell of ``reproduce``) says the
+    controller flocked: FLOCKED_VARIANCE at 5 s and FLOCKED_CONNECTED. The share connected is read at
+    the flight's end, ``flocking_horizon_s`` (a table cell, which omits it, ends at the last time its
+    variance was read). A record flown without the 5 s figures cannot say (ValueError)."""
     var = summary.get("velocity_variance_median", {})
-    if "5s" not in var or "share_connected_at_end" not in summary or summary.get("flocking_horizon_s") != 5.0:
+    horizon = summary.get("flocking_horizon_s", max((float(t.rstrip("s")) for t in var), default=None))
+    if "5s" not in var or "share_connected_at_end" not in summary or horizon != 5.0:
         raise ValueError("flocked() needs a record with the velocity variance at 5 s and the share connected "
                          f"at 5 s (relative_cost with flock_times reaching 5.0); got keys {sorted(summary)}")
     return var["5s"] <= FLOCKED_VARIANCE and summary["share_connected_at_end"] >= FLOCKED_CONNECTED

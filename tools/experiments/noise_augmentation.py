@@ -1,6 +1,6 @@
 """Experiment (issue 15): the obvious cure for VGAI's sensitivity to pixel noise, measured.
 
-    python tools/experiments/noise_augmentation.py            # about 10 minutes alone on two cores
+    python tools/experiments/noise_augmentation.py            # the record says how long it took
 
 Starts from the book's VGAI (data/vgai/vgai_F24.pt) and continues its stage 3 (joint K-step BPTT,
 ``vgai_training.joint_round``) for ``ROUNDS`` DAgger rounds, exactly as its training did, except
@@ -12,8 +12,9 @@ and by the learner (16 per round, DAgger's mixture), in the clean world.
 A control run does the same rounds without noise (``--control``), so that the difference between
 the two is the noise's and not the extra training's. Each writes ``data/experiments/NAME.pt`` and
 ``NAME.json``: the relative cost with did-it-flock and safety figures on the robustness sweep's
-held-out episodes (``robustness.RobustnessConfig``: same episodes, same perturbation seed), clean and
-with ImageNoise at every sigma of the sweep (the control: at sigma = 0.05 only).
+episodes (``robustness.RobustnessConfig``: the test episodes, same perturbation seed), clean and
+with ImageNoise at every sigma of the sweep (the control: at sigma = 0.05 only), and its provenance:
+the command, the sha256 of the VGAI it started from, the threads and the machine's load.
 """
 
 from __future__ import annotations
@@ -34,17 +35,19 @@ from vgai_lite.book import DATA_DIR  # noqa: E402
 from vgai_lite.checkpoints import save_controller  # noqa: E402
 from vgai_lite.imitation import EpisodeStore  # noqa: E402
 from vgai_lite.lab.perturbations import ImageNoise, perturbed  # noqa: E402
+from vgai_lite.lab.provenance import Provenance, sha256  # noqa: E402
 from vgai_lite.lab.robustness import RobustnessConfig  # noqa: E402
 from vgai_lite.vgai_training import joint_round  # noqa: E402
 
 ROUNDS = 2
 SIGMA_MAX = 0.1
-SEED = 15  # of the new flights and draws (the shipped training used 0; evaluation uses EVAL_SEED)
+SEED = 15  # of the new flights and draws (the shipped training used 0; evaluation uses the sweep's seed)
+BASE = DATA_DIR / "vgai" / "vgai_F24.pt"
 
 
 def train(noise: bool, progress: bool = True):
     cfg = FlockConfig()
-    learner = load_controller(DATA_DIR / "vgai" / "vgai_F24.pt")
+    learner = load_controller(BASE)
     tcfg = VGAITrainConfig.from_dict(learner.meta["train_config"])
     model = learner.model
     gen = torch.Generator().manual_seed(SEED)
@@ -86,17 +89,22 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
     name = "vgai_F24_finetuned_clean" if args.control else "vgai_F24_noise_augmented"
-    learner, hist = train(noise=not args.control)
+    command = f"python tools/experiments/noise_augmentation.py{' --control' if args.control else ''} --threads {args.threads}"
+    base_sha = sha256(BASE)
+    with Provenance(command) as prov:
+        learner, hist = train(noise=not args.control)
     folder = DATA_DIR / "experiments"
     meta = {"train_config": learner.meta["train_config"], "finished": True,
             "history": {**learner.meta["history"], "finetune": hist},
-            "finetune": {"from": "data/vgai/vgai_F24.pt", "rounds": ROUNDS, "seed": SEED,
+            "finetune": {"from": str(BASE.relative_to(ROOT)), "from_sha256": base_sha, "rounds": ROUNDS, "seed": SEED,
                          "noise_sigma_max": 0.0 if args.control else SIGMA_MAX}}
     learner.meta = meta
     save_controller(folder / f"{name}.pt", learner, meta=meta)
     sigmas = (0.05,) if args.control else dict(RobustnessConfig().perturbations)["image_noise"]
     record = {"name": name, "finetune": meta["finetune"], "finetune_seconds": round(hist["seconds"], 1),
-              "torch_threads": torch.get_num_threads(), "image_noise": evaluate(learner, sigmas)}
+              "torch_threads": torch.get_num_threads(),
+              "provenance": {"training": prov.record(checkpoint=folder / f"{name}.pt")},
+              "image_noise": evaluate(learner, sigmas)}
     (folder / f"{name}.json").write_text(json.dumps(record, indent=1) + "\n")
     print("wrote", folder / f"{name}.json")
     return 0

@@ -59,6 +59,7 @@ plt.show()
 # | **flocked** | the book's one definition: a small velocity variance late in the flight (at 5 s) and the swarm still connected | 01, `evaluate.flocked` |
 # | **validation / test episodes** | initial conditions drawn from two seeds: every choice (recipe, hyperparameter, training seed) is made on the validation episodes; the reported numbers come from the test episodes, which no choice has seen | 01, `book.VALIDATION_SEED`, `book.TEST_SEED` |
 # | **selection episodes** | the validation episodes under the name the seed choice uses | `book.SELECTION_SEED` |
+# | **working episodes** | a third seed's initial conditions, held out from training, on which the chapters draw their pictures and compare designs while they teach: not a test | 01, `book.EVAL_SEED` |
 # | **repair sampling** | drawing initial positions for large teams by moving the agents that break a constraint instead of redrawing the whole swarm | 01, `FlockConfig.init_method` |
 # | **DAgger round** | fly swarms with the expert and the learner mixed, label every visited state with the expert's action, add them to the data, refit | 03, `imitation.dagger_mix` |
 # | **the learner flying alone** | a share of each DAgger round's swarms flown by the learner at every step, so its own drift is in the data | 06, `VGAITrainConfig.learner_swarms` |

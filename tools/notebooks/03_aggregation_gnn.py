@@ -43,7 +43,7 @@ from vgai_lite.lab.runs import DAGNN_RUNS
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
 EPISODES = pick(50, 4)
-print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} held-out episodes (seed {EVAL_SEED})")
+print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} working episodes (seed {EVAL_SEED}, notebook 01)")
 
 # %% [markdown]
 # ## 1. Six exact local features
@@ -180,7 +180,7 @@ rounds = [r["round"] for r in hist["rounds"]]
 axes[1].plot(rounds, [r["val_relative_cost"] for r in hist["rounds"]], "o-")
 axes[1].axhline(1.0, color="0.5", ls="--")
 axes[1].set_xlabel("DAgger round"), axes[1].set_ylabel("relative cost")
-axes[1].set_title("validation episodes (seed 1000, not the held-out ones)")
+axes[1].set_title("per-round validation episodes (seed 1000, not the working ones)")
 plt.tight_layout()
 plt.show()
 
@@ -194,7 +194,8 @@ print("validation relative cost by round:", [round(r["val_relative_cost"], 2) fo
 # %% [markdown]
 # ## 6. Evaluation: Centralized, DAGNN, Local
 #
-# All controllers on the same held-out initial conditions (seed `EVAL_SEED`, never used in training):
+# All controllers on the same initial conditions, the working episodes (seed `EVAL_SEED`, never used in
+# training; notebook 01):
 
 # %%
 t0 = time.perf_counter()
@@ -278,12 +279,12 @@ prose("By the book's one criterion (notebook 07, `vgai_lite/lab/findings.py`: a 
 
 # %%
 rows, ks, costs, k_cells = [], [], [], []
-paper_k = {1: 1.94, 2: 1.82, 3: 1.70}
+paper_k = PAPER["K"]["DAGNN"]  # the paper's Table 1b row, by exchanges
 for K in (1, 2, 3, 4):
     res = relative_cost(shipped_dagnn(f"dagnn_K{K}"), cfg, episodes=EPISODES, seed=EVAL_SEED)
     lo, hi = res.mean_ratio_ci
     ks.append(K - 1), costs.append(res.mean_ratio), k_cells.append(res.summary())
-    rows.append(f"| {K - 1} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {paper_k.get(K - 1, '—')} | "
+    rows.append(f"| {K - 1} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {format(paper_k[K - 1], '.2f') if K - 1 in paper_k else '—'} | "
                 f"{res.safety.share_below(0.05):.0%} | {(K - 1) * 6 * 4} |")
 display(Markdown("| exchanges K-1 | DAGNN relative cost (95% CI) | paper | episodes < 0.05 m | bytes sent per agent per step |\n"
                  "|---|---|---|---|---|\n" + "\n".join(rows)))
