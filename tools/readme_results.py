@@ -98,7 +98,7 @@ def section() -> str:
         "|---|---|---|---|---|---|---|",
         f"| Local heuristic | {_ci(local_rec)} | {p['v_init']['Local'][3.0]:.2f} | {_flock(local_rec)} | {_episodes(local_rec)} | "
         "`python -m vgai_lite evaluate --controller local --json data/local/local.json` |",
-        *[f"| DAGNN, K-1 = {k - 1} | {_ci(dagnn[k])} | {p['K']['DAGNN'].get(k - 1, '-')} | {_flock(dagnn[k])} | "
+        *[f"| DAGNN, K-1 = {k - 1} | {_ci(dagnn[k])} | {format(p['K']['DAGNN'][k - 1], '.2f') if k - 1 in p['K']['DAGNN'] else '-'} | {_flock(dagnn[k])} | "
           f"{_episodes(dagnn[k])} | `python -m vgai_lite train-dagnn dagnn_K{k}` |" for k in (4, 1, 2, 3)],
         f"| VGAI, F = 24, K-1 = 3 ({seeds_note}) | {_ci(vgai['F24'])} | {p['F']['VGAI'][24]:.2f} | "
         f"{_flock(vgai['F24'])} | {_episodes(vgai['F24'])} | `python -m vgai_lite train-vgai --seeds --choose` |",

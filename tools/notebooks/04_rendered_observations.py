@@ -201,7 +201,8 @@ plt.show()
 # %% [markdown]
 # **Physics.** The same world can fly a whole episode: each drone is a unit-mass disc, the commanded
 # acceleration becomes a force, and pymunk resolves contacts between bodies (two drones touch when
-# their centres are closer than 10 cm, the book's close-call threshold). Without contacts the flight
+# their centres are closer than 10 cm: two body radii; notebook 01 reports this share beside the
+# 0.05 m it calls a crash, bodies half into each other). Without contacts the flight
 # matches our simulator's `step` exactly (a test checks it to 1e-9 m); with contacts, pymunk counts
 # them. Drones that do not steer at all collide, of course:
 
@@ -226,8 +227,8 @@ display(Markdown("| controller | episodes with a contact | contacts in all | lar
 
 # %% [markdown]
 # **Notebook 01 reports close calls for the expert; is that a contradiction?** Notebook 01 counts the
-# episodes in which some pair comes closer than 0.1 m (two bodies' diameters), on 50 held-out
-# episodes. This table flies only the first of those episodes. On exactly these, our own simulator's
+# episodes in which some pair comes closer than 0.1 m (two body radii: the bodies touch), on 50
+# working episodes. This table flies only the first of those episodes. On exactly these, our own simulator's
 # closest approaches give:
 
 # %%
