@@ -101,10 +101,15 @@ def main(argv=None) -> int:
     learner.meta = meta
     save_controller(folder / f"{name}.pt", learner, meta=meta)
     sigmas = (0.05,) if args.control else dict(RobustnessConfig().perturbations)["image_noise"]
+    rc = RobustnessConfig()
+    with Provenance(command) as evaluation:
+        flown = evaluate(learner, sigmas)
     record = {"name": name, "finetune": meta["finetune"], "finetune_seconds": round(hist["seconds"], 1),
               "torch_threads": torch.get_num_threads(),
-              "provenance": {"training": prov.record(checkpoint=folder / f"{name}.pt")},
-              "image_noise": evaluate(learner, sigmas)}
+              "provenance": {"training": prov.record(checkpoint=folder / f"{name}.pt"),
+                             "evaluation": evaluation.record(checkpoint=folder / f"{name}.pt", seed=rc.seed,
+                                                             episodes=rc.episodes)},
+              "image_noise": flown}
     (folder / f"{name}.json").write_text(json.dumps(record, indent=1) + "\n")
     print("wrote", folder / f"{name}.json")
     return 0
