@@ -325,20 +325,20 @@ from vgai_lite.lab.runs import how_trained
 shipped = clean["VGAI"]
 target = T["image_noise_ratio"] * shipped["relative_cost_mean"]
 meets = lambda rec: "meets" if rec["relative_cost_mean"] <= target else "misses"
-fl = lambda rec: "flocked" if flocked(rec) else "did not flock"
+flock_word = lambda rec: "flocked" if flocked(rec) else "did not flock"
 a_noisy, a_clean = aug["image_noise"][key], aug["image_noise"]["0"]
 lines = [
     f"The target: with pixel noise of {T['image_noise_sigma']:g}, at most {T['image_noise_ratio']:g}× the shipped VGAI's "
-    f"clean cost, i.e. {target:.2f}. Blurring the frames {meets(combo)} it ({combo['relative_cost_mean']:.2f}, {fl(combo)}). "
-    f"Two more rounds on noisy frames {meets(a_noisy)} it ({a_noisy['relative_cost_mean']:.2f}, {fl(a_noisy)}); on clean "
-    f"frames the noise-trained VGAI costs {a_clean['relative_cost_mean']:.2f} and {fl(a_clean)} (the shipped one: "
-    f"{shipped['relative_cost_mean']:.2f}, {fl(shipped)})."]
+    f"clean cost, i.e. {target:.2f}. Blurring the frames {meets(combo)} it ({combo['relative_cost_mean']:.2f}, {flock_word(combo)}). "
+    f"Two more rounds on noisy frames {meets(a_noisy)} it ({a_noisy['relative_cost_mean']:.2f}, {flock_word(a_noisy)}); on clean "
+    f"frames the noise-trained VGAI costs {a_clean['relative_cost_mean']:.2f} and {flock_word(a_clean)} (the shipped one: "
+    f"{shipped['relative_cost_mean']:.2f}, {flock_word(shipped)})."]
 if ctl is not None:
     c_clean, c_noisy = ctl["image_noise"]["0"], ctl["image_noise"][key]
     extra = findings.compare(c_clean, shipped)
     lines.append(
         f"The control, trained the same two rounds on clean frames, costs {c_clean['relative_cost_mean']:.2f} on clean "
-        f"frames ({fl(c_clean)}) and {c_noisy['relative_cost_mean']:.2f} with the noise: "
+        f"frames ({flock_word(c_clean)}) and {c_noisy['relative_cost_mean']:.2f} with the noise: "
         + {1: "the extra rounds alone cost the controller some of what it had on clean frames, so compare the "
               "noise-trained VGAI with the control, not only with the shipped one.",
            0: "the extra rounds alone leave the clean cost within its interval, so what separates the noise-trained "
@@ -390,10 +390,7 @@ dead = robustness.find(results, "VGAI", (("dead_camera", 1),))
 blur = robustness.find(results, "VGAI", (("blur", 1.0),))
 pos_big = robustness.find(results, "DAGNN", (("position_noise", 0.2),))
 n02 = robustness.find(results, "VGAI", (("image_noise", 0.02),))
-from vgai_lite.evaluate import as_safe_as_expert, flocked
-from vgai_lite.lab import findings
-
-flock_word = lambda rec: "flocked" if flocked(rec) else "did not flock"
+from vgai_lite.evaluate import as_safe_as_expert
 
 SPLIT = 0.2
 """A drop in the share of connected episodes this large (20 points) is what this sweep calls a split: with
