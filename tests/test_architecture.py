@@ -1,4 +1,4 @@
-"""The library's shape (issue 12): one idea per module, data flowing one way, the book's names at the
+"""The library's shape: one idea per module, data flowing one way, the book's names at the
 top level, and the shipped results unchanged by the reorganisation."""
 
 import ast
@@ -9,7 +9,7 @@ import pytest
 import torch
 
 import vgai_lite as vl
-from vgai_lite.book import DATA_DIR, EVAL_SEED
+from vgai_lite.book import DATA_DIR, WORKING_SEED
 from vgai_lite.lab.method_exercises import check_dagger_mix
 
 PACKAGE = Path(vl.__file__).parent
@@ -44,16 +44,16 @@ def _own_imports(node, name: str) -> set:
 @pytest.mark.slow
 def test_results_of_the_shipped_controllers_are_the_ones_measured_before_the_refactor():
     """Relative cost on the first 3 held-out episodes, measured with the pre-refactor library
-    (commit b429607): the DAGNN K-1 = 3 and last round's VGAI F = 24 (now kept as
-    experiments/vgai_F24_plain) fly exactly as they did; the VGAI F = 24 of the consensus round (now
-    experiments/vgai_F24_mixture, the recipe without the learner flying alone) as measured when it was shipped."""
+    (commit b429607): the DAGNN K-1 = 3 and the paper-recipe VGAI F = 24 (experiments/vgai_F24_plain)
+    fly exactly as they did; the VGAI F = 24 trained with DAgger's mixture alone
+    (experiments/vgai_F24_mixture) as measured when it was trained."""
     cfg = vl.FlockConfig()
     before = {"dagnn/dagnn_K4": [37.43408203125, 38.06521987915039, 42.21247482299805],
               "experiments/vgai_F24_plain": [84.70115661621094, 79.35276794433594, 81.79953002929688],
               "experiments/vgai_F24_mixture": [67.89888000488281, 49.50733184814453, 62.51982498168945]}
     expert = [33.22722244262695, 33.17874526977539, 34.48318099975586]
     for name, costs in before.items():
-        res = vl.relative_cost(vl.load_controller(DATA_DIR / f"{name}.pt"), cfg, episodes=3, seed=EVAL_SEED,
+        res = vl.relative_cost(vl.load_controller(DATA_DIR / f"{name}.pt"), cfg, episodes=3, seed=WORKING_SEED,
                                flock_times=())
         torch.testing.assert_close(res.cost, torch.tensor(costs), rtol=1e-5, atol=0)
         torch.testing.assert_close(res.expert_cost, torch.tensor(expert), rtol=1e-6, atol=0)
@@ -153,5 +153,5 @@ def test_training_leaves_the_global_random_state_alone():
     torch.manual_seed(123)
     expected = torch.rand(3)
     torch.manual_seed(123)
-    vl.train_dagnn(cfg, tcfg, progress=False, validation_episodes=1)
+    vl.train_dagnn(cfg, tcfg, progress=False, check_episodes=1)
     torch.testing.assert_close(torch.rand(3), expected)

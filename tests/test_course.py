@@ -1,4 +1,4 @@
-"""Course use (issue 7): solution stubs, student copies and the grader.
+"""Course use: solution stubs, student copies and the grader.
 
 The grader tests execute notebooks (quick mode): one notebook's solutions get full marks (nbval's
 run of each graded notebook checks its solutions, conftest.py), every untouched student copy

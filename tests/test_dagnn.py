@@ -146,7 +146,7 @@ def test_a_short_dagger_run_lowers_the_imitation_loss(tmp_path):
     cfg = FlockConfig(N=20, T=40)
     tcfg = DAGNNTrainConfig(K=2, hidden=(16,), rounds=3, episodes_per_round=4, epochs_per_round=3,
                             batch_size=256)
-    ctrl, hist = train_dagnn(cfg, tcfg, checkpoint=tmp_path / "d.pt", progress=False, validation_episodes=2)
+    ctrl, hist = train_dagnn(cfg, tcfg, checkpoint=tmp_path / "d.pt", progress=False, check_episodes=2)
     assert hist["loss"][2] < hist["loss"][0]  # three epochs on round 0's data
     assert len(hist["rounds"]) == 3 and (tmp_path / "d.pt").is_file()
     assert load_controller(tmp_path / "d.pt").meta["finished"]

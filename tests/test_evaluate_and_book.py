@@ -47,7 +47,7 @@ def test_relative_cost_says_whether_it_flocked_without_changing_the_cost():
     assert expert.median_variance()[5.0] < 1e-6 and expert.share_connected == 1.0
     assert f.median_variance()[5.0] > 100 * expert.median_variance()[5.0]
     with pytest.raises(ValueError, match="flock_times"):
-        relative_cost(LocalController(cfg), cfg, episodes=2, flock_times=(-1.0,))
+        relative_cost(LocalController(cfg), cfg, episodes=2, seed=0, flock_times=(-1.0,))
 
 
 def test_relative_cost_uses_the_same_initial_conditions_for_a_seed():
@@ -118,7 +118,7 @@ def test_consensus_figures_tell_a_flock_from_a_swarm_that_falls_apart():
     from vgai_lite.consensus import consensus, groups
 
     cfg = FlockConfig(N=20)
-    flock = consensus(ExpertController(cfg), cfg, episodes=2, times=(0.0, 1.0))
+    flock = consensus(ExpertController(cfg), cfg, episodes=2, seed=0, times=(0.0, 1.0))
     v0, v1 = flock.median_variance().values()
     assert v1 < 1e-3 * v0  # the expert aligns every velocity within a second
     assert flock.share_connected == 1.0 and flock.summary()["episodes"] == 2

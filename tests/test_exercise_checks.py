@@ -1,4 +1,4 @@
-"""The exercise checks as tests of the student (issue 25): every plausible wrong answer fails on every
+"""The exercise checks as tests of the student: every plausible wrong answer fails on every
 run, every correct answer passes however it is written. Each check draws fresh random inputs, so each
 case runs several times."""
 

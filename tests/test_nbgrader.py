@@ -1,4 +1,4 @@
-"""The book graded with nbgrader as it is (issue 25): ``nbgrader generate_assignment`` makes the student
+"""The book graded with nbgrader as it is: ``nbgrader generate_assignment`` makes the student
 version of a notebook from its cell metadata, and ``nbgrader autograde`` gives a solution full marks
 and an untouched student version zero: the same points as the book's own grader.
 

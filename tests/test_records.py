@@ -1,4 +1,4 @@
-"""Records that say where they came from, checked against their checkpoints (issue 24).
+"""Records that say where they came from, checked against their checkpoints.
 
 Every record with a ``provenance`` names its command, commit, versions, threads, load average and the
 sha256 of the checkpoint it flew; with ``pinned`` it keeps its first episodes' relative costs one by

@@ -1,4 +1,4 @@
-"""`python -m vgai_lite reproduce` (issue 6): plan, reuse of shipped models, a quick run of every table."""
+"""`python -m vgai_lite reproduce`: plan, reuse of shipped models, a quick run of every table."""
 
 import csv
 import dataclasses

@@ -113,17 +113,37 @@ def test_motion_frames_change_the_input_only_when_something_moves():
     vision = VISION
     c = make_vgai(vision=vision)
     r, _ = sample_initial_state(CFG, 1, torch.Generator().manual_seed(0), dtype=torch.float64)
-    c.reset()
-    for _ in range(vision.motion_gap + 1):
-        X_still = c.features(r, torch.zeros_like(r))  # hovering: the frames before t = 0 are the same
+    X_still = c.features(r, r)  # hovering: the frame of now and of g steps ago are the same
     C0 = len(vision.render.channels)
     img = camera_input(vision, CFG, r, r)
     assert img.shape[2] == 2 * C0 and img[:, :, C0:].abs().max() == 0  # difference channels empty
-    shifted = c.features(r + 0.5)  # the whole swarm translated: every view, hence X, is the same
+    shifted = c.features(r + 0.5, r + 0.5)  # the whole swarm translated: every view, hence X, is the same
     torch.testing.assert_close(shifted, X_still)
     moved = r.clone()
-    moved[:, 3] += 0.1  # one drone moves: the others see it
-    assert not torch.allclose(c.features(moved), X_still)
+    moved[:, 3] += 0.1  # one drone moved since g steps ago: the others see it
+    assert not torch.allclose(c.features(moved, r), X_still)
+
+
+def test_reading_the_features_has_no_side_effect_only_a_step_advances_the_frame_memory():
+    """``features`` may be called any number of times in a step (a plot, a probe): the actions of a
+    flight are the same, because only ``observe`` (once per step) advances the frame memory."""
+    cfg = CFG.replace(T=8)
+    r0, v0 = sample_initial_state(cfg, 2, torch.Generator().manual_seed(5), dtype=torch.float64)
+    plain, probed = make_vgai(), make_vgai()
+
+    class Probe:
+        name, K = "probed", probed.K
+
+        def reset(self):
+            probed.reset()
+
+        def __call__(self, r, v):
+            before = probed.seen[0] if probed.seen else r
+            for _ in range(3):
+                probed.features(r, before)
+            return probed(r, v)
+
+    torch.testing.assert_close(rollout(Probe(), cfg, r0, v0).u, rollout(plain, cfg, r0, v0).u)
 
 
 def test_a_vision_config_written_without_a_field_is_refused_not_defaulted():
@@ -149,7 +169,7 @@ def test_a_miniature_vgai_training_runs_end_to_end_and_backpropagates_through_K_
     tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
-    ctrl, hist = train_vgai(cfg, tcfg, checkpoint=tmp_path / "v.pt", progress=False, validation_episodes=1)
+    ctrl, hist = train_vgai(cfg, tcfg, checkpoint=tmp_path / "v.pt", progress=False, check_episodes=1)
     assert len(hist["warm_loss"]) == 3 and len(hist["joint_loss"]) == 2 and len(hist["rounds"]) == 2
     loaded = load_controller(tmp_path / "v.pt")
     assert loaded.meta["finished"] and loaded.K == 3
@@ -162,10 +182,10 @@ def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_p
     tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
-    plain, _ = train_vgai(cfg, tcfg, progress=False, validation_episodes=1)
-    first, h1 = train_vgai(cfg, tcfg, progress=False, validation_episodes=1, stage1_cache=tmp_path)
+    plain, _ = train_vgai(cfg, tcfg, progress=False, check_episodes=1)
+    first, h1 = train_vgai(cfg, tcfg, progress=False, check_episodes=1, stage1_cache=tmp_path)
     assert stage1_cache_file(tmp_path, cfg, tcfg).is_file() and "stage1_cached" not in h1
-    again, h2 = train_vgai(cfg, tcfg, progress=False, validation_episodes=1, stage1_cache=tmp_path)
+    again, h2 = train_vgai(cfg, tcfg, progress=False, check_episodes=1, stage1_cache=tmp_path)
     assert h2["stage1_cached"] == stage1_cache_file(tmp_path, cfg, tcfg).name
     assert h2["warm_loss"] == h1["warm_loss"]
     for a, b, c in zip(plain.model.state_dict().values(), first.model.state_dict().values(),
@@ -252,16 +272,16 @@ def test_a_cnn_with_motion_features_round_trips_through_both_file_kinds(tmp_path
     torch.testing.assert_close(c2(r, v), c(r, v))
 
 
-def test_the_default_vgai_is_the_training_seed_the_selection_chose():
+def test_the_default_vgai_is_the_training_seed_chosen_on_validation_episodes():
     """data/vgai/vgai_F24.pt is one of the three shipped training seeds, the one with the lowest
-    relative cost on the selection episodes (never the evaluation seed), as runs.VGAI_F24_SEED says."""
+    relative cost on the validation episodes (never the test seed), as runs.VGAI_F24_SEED says."""
     import json
 
-    from vgai_lite.book import DATA_DIR, EVAL_SEED
+    from vgai_lite.book import DATA_DIR, VALIDATION_SEED
     from vgai_lite.lab.runs import VGAI_F24_SEED, VGAI_RUNS, VGAI_SEED_RUNS
 
     choice = json.loads((DATA_DIR / "vgai" / "seeds" / "choice.json").read_text())
-    assert choice["selection_seed"] != EVAL_SEED and set(choice["candidates"]) == set(VGAI_SEED_RUNS)
+    assert choice["validation_seed"] == VALIDATION_SEED and set(choice["candidates"]) == set(VGAI_SEED_RUNS)
     best = min(choice["candidates"], key=lambda n: choice["candidates"][n]["relative_cost_mean"])
     assert choice["chosen"] == best and VGAI_SEED_RUNS[best].seed == VGAI_F24_SEED
     assert VGAI_RUNS["vgai_F24"] == VGAI_SEED_RUNS[best]

@@ -1,4 +1,4 @@
-"""Words in the markdown cells of each committed notebook at one or more commits (issue 26 reports them):
+"""Words in the markdown cells of each committed notebook at one or more commits:
 
     python3 tools/notebook_word_counts.py 07ad35d~1 HEAD
 """

@@ -200,7 +200,7 @@ def _robustness() -> str:
     aug_rec = _load("data/experiments/vgai_F24_noise_augmented.json")["image_noise"]
     aug, aug_clean = aug_rec[f"{T['image_noise_sigma']:g}"], aug_rec["0"]
     eps = res["config"]["episodes"]
-    stale = clean.get("checkpoint") != robustness._file_hash(robustness.CONTROLLERS["VGAI"])
+    stale = clean.get("checkpoint") != robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"])
     return (("**Not yet recomputed for the shipped VGAI**: the sweep below flew the book's earlier VGAI (without the "
              "learner flying alone). " if stale else "")
             + f"Robustness (notebook 08, `python -m vgai_lite reproduce --only robustness`; {eps} episodes of seed "

@@ -1,4 +1,4 @@
-"""The book's headline figures on the test episodes (issue 24's protocol): each shipped controller flown
+"""The book's headline figures on the test episodes: each shipped controller flown
 once on ``book.TEST_SEED``'s episodes, nothing chosen on them.
 
     python tools/test_episodes.py                        # Local, the DAGNN, the shipped VGAI -> data/test/

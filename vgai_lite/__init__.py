@@ -17,8 +17,8 @@ per idea; data flow one way: a module imports only modules listed before it here
   learning           ``models`` (AggregationMLP eqs. 7-8, VisualCNN), ``learned_controllers``
                      (DAGNNController, VGAIController), ``checkpoints`` (files), ``imitation`` (DAgger,
                      what both trainings share), ``dagnn_training``, ``vgai_config`` (what defines a
-                     VGAI run), ``state_estimation`` (stage 1: the CNN taught the local features),
-                     ``vgai_training`` (three stages, K-step BPTT)
+                     VGAI run), ``vgai_training`` (VGAI's training top to bottom: state estimation,
+                     the MLP, K-step BPTT), ``state_estimation`` (stage 1 run alone, notebook 05)
   pictures           ``viz``, ``viz3d``, ``diagrams``
 
 The reproduction and the book's tooling live in ``vgai_lite.lab`` (the paper's tables, the shipped

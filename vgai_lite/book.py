@@ -1,4 +1,4 @@
-"""The book's switches and places: quick mode, the data folder, seeds.
+"""The book's switches and places: quick mode, the data folder, the seeds of its episode sets.
 
 Introduced in notebook 00. Quick mode is read here and nowhere else: set the environment variable
 ``VGAI_LITE_QUICK=1`` (the test suite does) and every notebook shrinks its loops, via ``pick``:
@@ -8,6 +8,7 @@ Introduced in notebook 00. Quick mode is read here and nowhere else: set the env
 
 from __future__ import annotations
 
+import importlib.resources
 import os
 from pathlib import Path
 
@@ -42,6 +43,14 @@ def threads() -> int:
     return int(raw)
 
 
+QUICK_T = 30
+"""Steps per episode of every quick run of the command line (``reproduce --quick``, the quick robustness
+sweep): the notebooks' quick mode and the quick runs the tests make, a few seconds each."""
+QUICK_TRAIN_N = 12
+"""Agents of the trainings of a quick run (rendering is a VGAI training's cost; the cells still fly
+their columns' N)."""
+
+
 def pick(full, quick):
     """``quick`` in quick mode, ``full`` otherwise: ``range(pick(2000, 2))``."""
     return quick if QUICK else full
@@ -49,23 +58,35 @@ def pick(full, quick):
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA_DIR = ROOT / "data"
-"""Shipped results and checkpoints (``data/`` beside the package)."""
+"""The repository's results and checkpoints (``data/`` beside the package), where the book reads and
+writes its records."""
 
-EVAL_SEED = 2020
-"""Seed of the held-out initial conditions every evaluation in the book uses; training never
-draws from it (training seeds start at 0 and stay below 1000)."""
+
+def shipped_file(relative: str) -> Path:
+    """A file the book ships, e.g. ``"vgai/vgai_F24.pt"``: from ``DATA_DIR`` when the library runs from
+    its repository, else from the installed package's data (``vgai_lite/shipped/``, the wheel's copy
+    of ``data/vgai`` and ``data/dagnn``, read through ``importlib.resources``)."""
+    local = DATA_DIR / relative
+    if local.is_file():
+        return local
+    installed = importlib.resources.files("vgai_lite") / "shipped" / relative
+    if installed.is_file():
+        return Path(str(installed))
+    raise FileNotFoundError(f"no shipped file {relative!r} in {DATA_DIR} or in the installed package "
+                            f"(vgai_lite/shipped/): the book ships data/vgai/*.pt and data/dagnn/*.pt")
 
 VALIDATION_SEED = 3000
 """Seed of the validation episodes: every design and recipe choice, and the pick of one of several
-trainings of a configuration (``runs.choose_seed``), is made on these episodes and on no others.
-Neither the test seed nor any training or per-round validation seed (seed + 1000)."""
-
-SELECTION_SEED = VALIDATION_SEED
-"""The validation seed under the name ``runs.choose_seed`` uses."""
+trainings of a configuration (``runs.choose_seed``), is made on these episodes and on no others."""
 
 TEST_SEED = 5000
-"""Seed of the test episodes: used only for the numbers the book reports, never to choose anything
-(notebook 01 says why). EVAL_SEED's episodes (2020) are not a test: recipes were compared on them."""
+"""Seed of the test episodes: only the numbers the book reports for the controllers it ships are
+flown on them; nothing is chosen on them (notebook 01's table of episode sets says why)."""
+
+WORKING_SEED = 2020
+"""Seed of the working episodes: the chapters' pictures and worked experiments. Held out from every
+training (training seeds start at 0 and their round checks at 1000), but the chapters compare designs
+on them while they teach, so they are neither validation nor test episodes."""
 
 
 def prose(template: str, **values):

@@ -1,5 +1,5 @@
-"""The book's files: learned controllers, stand-alone state estimators, and the cache of VGAI's
-first training stage. One file holds the configuration, the architecture and the weights.
+"""The book's files: learned controllers and stand-alone state estimators. One file holds the
+configuration, the architecture and the weights.
 
 Introduced in notebook 03. Files are written atomically (a temporary file renamed into place, so an
 interrupted run never leaves half a file) with ``torch.save`` and read with
@@ -16,6 +16,7 @@ from typing import Optional, Union
 
 import torch
 
+from .book import shipped_file
 from .config import FlockConfig
 from .learned_controllers import DAGNNController, VGAIController
 from .models import AggregationMLP, VGAIModel, VisualCNN, cnn_from_spec
@@ -23,7 +24,6 @@ from .vision import VisionConfig
 
 FORMAT = "vgai-lite-controller/1"
 ESTIMATOR_FORMAT = "vgai-lite-estimator/1"
-STAGE1_FORMAT = "vgai-lite-stage1/2"
 
 
 def config_hash(obj) -> str:
@@ -41,14 +41,14 @@ def atomic_save(payload: dict, path: Union[str, Path]) -> Path:
     return path
 
 
-def _weights(module: torch.nn.Module) -> dict:
+def weights(module: torch.nn.Module) -> dict:
     return {k: t.detach().cpu() for k, t in module.state_dict().items()}
 
 
 def save_controller(path: Union[str, Path], controller, meta: Optional[dict] = None) -> Path:
     """Write ``controller`` (it must have ``spec()``, ``model`` and ``cfg``) and ``meta`` to ``path``."""
     payload = {"format": FORMAT, "spec": controller.spec(), "config": dataclasses.asdict(controller.cfg),
-               "state_dict": _weights(controller.model), "meta": meta or {}}
+               "state_dict": weights(controller.model), "meta": meta or {}}
     return atomic_save(payload, path)
 
 
@@ -81,8 +81,24 @@ def is_finished_with(path: Union[str, Path], cfg: FlockConfig, train_config: dic
             and bool(meta.get("finished")))
 
 
+SHIPPED_KINDS = ("vgai", "dagnn")
+
+
+def resolve(path: Union[str, Path]) -> Path:
+    """``path`` itself, or, for the name of a controller the book ships (``"vgai_F24"``, ``"dagnn_K4"``),
+    its file (``book.shipped_file``: the checkout's data/ or the installed package's copy)."""
+    p = Path(path)
+    if p.suffix or len(p.parts) > 1 or p.is_file():
+        return p
+    kind = str(path).split("_")[0]
+    if kind not in SHIPPED_KINDS:
+        raise ValueError(f"{path!r} is neither a checkpoint file (.pt) nor the name of a shipped controller "
+                         f"(vgai_* or dagnn_*, e.g. 'vgai_F24')")
+    return shipped_file(f"{kind}/{path}.pt")
+
+
 def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, device=None):
-    """Rebuild the controller stored at ``path``.
+    """Rebuild the controller stored at ``path`` (a file, or a shipped controller's name: ``"vgai_F24"``).
 
     Args:
         cfg: fly the controller in this configuration instead of the one it was trained in (for
@@ -90,17 +106,18 @@ def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, d
     Returns: a controller (``reset()``, ``__call__(r, v) -> u``) with ``.meta`` holding the
     training record stored beside the weights.
     """
+    path = resolve(path)
     payload = read_checkpoint(path)
     spec, stored_cfg = payload["spec"], FlockConfig(**payload["config"])
     kind = spec.get("kind")
     if kind == "dagnn":
         model = AggregationMLP(spec["K"], spec["F"], spec["hidden"])
-        _load_weights(model, payload["state_dict"], path)
+        load_weights(model, payload["state_dict"], path)
         controller = DAGNNController(model.to(device).eval(), cfg or stored_cfg, spec["gso"],
                                      spec["feature_transform"])
     elif kind == "vgai":
         model = VGAIModel(cnn_from_spec(spec["cnn"], spec["F"]), AggregationMLP(spec["K"], spec["F"], spec["hidden"]))
-        _load_weights(model, payload["state_dict"], path)
+        load_weights(model, payload["state_dict"], path)
         controller = VGAIController(model.to(device).eval(), cfg or stored_cfg,
                                     VisionConfig.from_dict(spec["vision"]), spec["gso"])
     else:
@@ -110,7 +127,7 @@ def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, d
     return controller
 
 
-def _load_weights(model: torch.nn.Module, state_dict: dict, path) -> None:
+def load_weights(model: torch.nn.Module, state_dict: dict, path) -> None:
     try:
         model.load_state_dict(state_dict, strict=True)
     except RuntimeError as exc:
@@ -125,7 +142,7 @@ def _load_weights(model: torch.nn.Module, state_dict: dict, path) -> None:
 def save_estimator(path: Union[str, Path], cnn: VisualCNN, vision: VisionConfig, meta: dict) -> Path:
     payload = {"format": ESTIMATOR_FORMAT, "vision": vision.to_dict(),
                "cnn": {**cnn.spec(), "F": cnn.F},
-               "state_dict": _weights(cnn), "meta": meta}
+               "state_dict": weights(cnn), "meta": meta}
     return atomic_save(payload, path)
 
 
@@ -138,30 +155,5 @@ def load_estimator(path: Union[str, Path]) -> tuple[VisualCNN, VisionConfig, dic
     if not isinstance(payload, dict) or payload.get("format") != ESTIMATOR_FORMAT:
         raise ValueError(f"{path} is not a vgai-lite state estimator (format {ESTIMATOR_FORMAT!r})")
     cnn = cnn_from_spec(payload["cnn"], payload["cnn"]["F"])
-    _load_weights(cnn, payload["state_dict"], path)
+    load_weights(cnn, payload["state_dict"], path)
     return cnn.eval(), VisionConfig.from_dict(payload["vision"]), payload["meta"]
-
-
-# ---------------------------------------------------------------------------------------------
-# The cache of VGAI's first training stage, keyed by what that stage depends on
-
-
-def stage1_file(folder: Union[str, Path], identity: dict, F: int) -> Path:
-    """Where the stage 1 with this ``identity`` (a JSON-able dict) is cached in ``folder``."""
-    return Path(folder) / f"stage1_F{F}_{config_hash({'format': STAGE1_FORMAT, **identity})}.pt"
-
-
-def save_stage1(path: Path, identity: dict, cnn: VisualCNN, generator: torch.Generator, record: dict) -> Path:
-    """The CNN at the end of stage 1, the sampling generator's state then, and ``record`` (plain values)."""
-    payload = {"identity_json": json.dumps({"format": STAGE1_FORMAT, **identity}, sort_keys=True),
-               "state_dict": _weights(cnn), "generator": generator.get_state(), "record": record}
-    return atomic_save(payload, path)
-
-
-def load_stage1(path: Path, cnn: VisualCNN, generator: torch.Generator) -> dict:
-    """Restore a cached stage 1 into ``cnn`` and ``generator``; returns its record."""
-    payload = torch.load(path, map_location="cpu", weights_only=True)
-    _load_weights(cnn, payload["state_dict"], path)
-    cnn.eval()
-    generator.set_state(payload["generator"])
-    return payload["record"]

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import torch
 
-from .book import EVAL_SEED
 from .config import FlockConfig
 from .flocking import rollout, sample_initial_state, velocity_variance
 from .graphs import adjacency, k_hop_reach
@@ -68,10 +67,11 @@ class Consensus:
                 f"in {int((self.groups_at_end == 1).sum())} of {len(self.groups_at_end)} episodes")
 
 
-def consensus(controller, cfg: FlockConfig, episodes: int = 10, seed: int = EVAL_SEED,
+def consensus(controller, cfg: FlockConfig, episodes: int = 10, *, seed: int,
               times: tuple = CONSENSUS_TIMES, name: str = "") -> Consensus:
-    """Fly ``controller`` from ``episodes`` initial conditions of ``seed`` (the book's held-out
-    EVAL_SEED by default) for as long as the last of ``times`` needs, and read its flocking figures."""
+    """Fly ``controller`` from ``episodes`` initial conditions of ``seed`` (no default: say which
+    episodes, as for ``evaluate.relative_cost``) for as long as the last of ``times`` needs, and read
+    its flocking figures."""
     steps = int(round(max(times) / cfg.Ts)) + 1
     if any(t < 0 for t in times):
         raise ValueError(f"times must be >= 0 seconds, got {times}")

@@ -11,6 +11,17 @@ from .config import DISTANCE_FLOOR, FlockConfig
 from .flocking import check_state, pairwise_offsets, saturate
 
 
+def log_sign(cfg: FlockConfig) -> float:
+    """The sign of the log term of U: -1 in the paper's eq. 3, +1 in its public reference code."""
+    return -1.0 if cfg.potential == "paper" else 1.0
+
+
+def repulsion_weight(inv_d2: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
+    """w with -grad_{r_i} U = w r_ij, from 1/d2 (d2 = ||r_ij||^2): w = 2 (1/d2^2 - sign/d2), since
+    grad (1/d2) = -2 r_ij / d2^2 and grad log d2 = 2 r_ij / d2."""
+    return 2.0 * inv_d2 * (inv_d2 - log_sign(cfg))
+
+
 def potential(d2: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
     """The collision-avoidance potential U of eq. 3 as a function of d2 = ||r_ij||^2.
 
@@ -19,7 +30,7 @@ def potential(d2: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
     d2 is floored at DISTANCE_FLOOR^2 (config.DISTANCE_FLOOR: finite at d2 = 0).
     """
     d2 = d2.clamp(min=DISTANCE_FLOOR ** 2)
-    sign = -1.0 if cfg.potential == "paper" else 1.0
+    sign = log_sign(cfg)
     rho2 = torch.as_tensor(cfg.rho ** 2, dtype=d2.dtype, device=d2.device)
     inside = 1.0 / d2 + sign * torch.log(d2)
     outside = 1.0 / rho2 + sign * torch.log(rho2)
@@ -29,27 +40,24 @@ def potential(d2: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
 def potential_gradient(r_ij: torch.Tensor, cfg: FlockConfig) -> torch.Tensor:
     """grad_{r_i} U(r_i, r_j) for offsets r_ij = r_i - r_j, shape (..., 2) -> (..., 2).
 
-    With d2 = ||r_ij||^2:  grad (1/d2) = -2 r_ij / d2^2  and  grad log d2 = 2 r_ij / d2, so
+    With d2 = ||r_ij||^2 (``repulsion_weight``):
     paper:      grad U = -2 r_ij (1/d2^2 + 1/d2)   (always pushes i away from j)
     reference:  grad U = -2 r_ij (1/d2^2 - 1/d2)
     and grad U = 0 beyond rho, where U is constant. d2 is floored at DISTANCE_FLOOR^2 (zero at r_ij = 0).
     """
     d2 = r_ij.square().sum(dim=-1, keepdim=True).clamp(min=DISTANCE_FLOOR ** 2)
-    sign = -1.0 if cfg.potential == "paper" else 1.0
-    inv = 1.0 / d2
-    grad = -2.0 * r_ij * (inv * inv - sign * inv)
+    grad = -repulsion_weight(1.0 / d2, cfg) * r_ij
     return torch.where(d2 <= cfg.rho ** 2, grad, torch.zeros_like(grad))
 
 
 def _repulsion(dx, dy, d2, mask, cfg: FlockConfig) -> torch.Tensor:
     """-sum_j grad_{r_i} U over the pairs in ``mask`` (B, N, N), from pairwise offsets: (B, N, 2).
 
-    -grad_{r_i} U = w_ij r_ij with w_ij = 2 (1/d2^2 -+ 1/d2); w_ij = 0 outside ``mask``; d2 floored
+    -grad_{r_i} U = w_ij r_ij (``repulsion_weight``); w_ij = 0 outside ``mask``; d2 floored
     at DISTANCE_FLOOR^2, so that coincident agents (r_ij = 0) push each other with 0, not NaN.
     """
     inv = torch.where(mask, d2.clamp(min=DISTANCE_FLOOR ** 2), torch.inf).reciprocal_()  # 1/d2 on the masked pairs, else 0
-    sign = -1.0 if cfg.potential == "paper" else 1.0
-    w = 2.0 * inv * (inv - sign)
+    w = repulsion_weight(inv, cfg)
     return torch.stack(((w * dx).sum(dim=-1), (w * dy).sum(dim=-1)), dim=-1)
 
 

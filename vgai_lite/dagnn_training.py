@@ -18,9 +18,10 @@ from tqdm.auto import tqdm
 from .checkpoints import save_controller
 from .config import FlockConfig, config_dict
 from .flocking import sample_initial_state
-from .graphs import DEFAULT_GSO
-from .imitation import fit_l1, fly_dagger, validation_record
-from .learned_controllers import DAGNNController
+from .features import N_LOCAL_FEATURES
+from .graphs import DEFAULT_GSO, GSO_KINDS
+from .imitation import fit_l1, fly_dagger, round_check
+from .learned_controllers import FEATURE_TRANSFORMS, DAGNNController
 from .models import AggregationMLP
 
 
@@ -64,6 +65,25 @@ class DAGNNTrainConfig:
     early_steps: int = 50
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        for name in ("K", "rounds", "episodes_per_round", "epochs_per_round", "batch_size"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"DAGNNTrainConfig: {name} must be a whole number >= 1, got {value!r}")
+        if not isinstance(self.early_steps, int) or self.early_steps < 0 or not isinstance(self.seed, int) or self.seed < 0:
+            raise ValueError(f"DAGNNTrainConfig: early_steps and seed must be whole numbers >= 0, "
+                             f"got {self.early_steps!r}, {self.seed!r}")
+        for name in ("p_learner", "keep_late"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"DAGNNTrainConfig: {name} is a probability, in [0, 1]; got {getattr(self, name)!r}")
+        if not self.lr > 0:
+            raise ValueError(f"DAGNNTrainConfig: lr must be > 0, got {self.lr!r}")
+        if self.gso not in GSO_KINDS:
+            raise ValueError(f"DAGNNTrainConfig: gso must be one of {GSO_KINDS}, got {self.gso!r}")
+        if self.feature_transform not in FEATURE_TRANSFORMS:
+            raise ValueError(f"DAGNNTrainConfig: feature_transform must be one of {FEATURE_TRANSFORMS}, "
+                             f"got {self.feature_transform!r}")
+
     def to_dict(self) -> dict:
         return config_dict(self)
 
@@ -106,23 +126,23 @@ def collect(learner: DAGNNController, cfg: FlockConfig, r0: torch.Tensor, v0: to
 
 def train_dagnn(cfg: FlockConfig, tcfg: DAGNNTrainConfig = DAGNNTrainConfig(),
                 checkpoint: Optional[Union[str, Path]] = None, device=None, progress: bool = True,
-                validation_episodes: int = 10) -> tuple[DAGNNController, dict]:
+                check_episodes: int = 10) -> tuple[DAGNNController, dict]:
     """Train a DAGNN by DAgger. Returns the controller and its history.
 
     history: "loss" (one value per epoch: mean L1 over the epoch), "rounds" (per round: rows in the
-    dataset, validation relative cost on ``validation_episodes`` episodes of seed
-    ``tcfg.seed + 1000``, seconds since start). If ``checkpoint`` is given, the controller is saved
+    dataset, relative cost on ``check_episodes`` episodes of the round check (``imitation.round_check``),
+    seconds since start). If ``checkpoint`` is given, the controller is saved
     there after every round (with the history so far in its meta). The global torch RNG is left as
     it was (the weights are drawn inside ``torch.random.fork_rng``).
     """
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(tcfg.seed)  # the weights' initialisation
-        return _train_dagnn(cfg, tcfg, checkpoint, device, progress, validation_episodes)
+        return _train_dagnn(cfg, tcfg, checkpoint, device, progress, check_episodes)
 
 
-def _train_dagnn(cfg, tcfg, checkpoint, device, progress, validation_episodes):
+def _train_dagnn(cfg, tcfg, checkpoint, device, progress, check_episodes):
     gen = torch.Generator().manual_seed(tcfg.seed)
-    model = AggregationMLP(tcfg.K, 6, tcfg.hidden).to(device)
+    model = AggregationMLP(tcfg.K, N_LOCAL_FEATURES, tcfg.hidden).to(device)
     learner = DAGNNController(model, cfg, tcfg.gso, tcfg.feature_transform)
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
     data = Dataset()
@@ -146,9 +166,9 @@ def _train_dagnn(cfg, tcfg, checkpoint, device, progress, validation_episodes):
         history["loss"] += fit_l1(model, Zall, Uall, opt, tcfg.epochs_per_round, tcfg.batch_size, gen, device)
         model.eval()
         history["rounds"].append({"round": rnd, "rows": len(Uall), "loss": history["loss"][-1],
-                                  **validation_record(learner, cfg, validation_episodes, tcfg.seed, device),
+                                  **round_check(learner, cfg, check_episodes, tcfg.seed, device),
                                   "seconds": time.perf_counter() - start})
-        bar.set_postfix(loss=f"{history['loss'][-1]:.3f}", val=f"{history['rounds'][-1]['val_relative_cost']:.2f}")
+        bar.set_postfix(loss=f"{history['loss'][-1]:.3f}", check=f"{history['rounds'][-1]['check_relative_cost']:.2f}")
         bar.update()
         save(finished=rnd == tcfg.rounds - 1)
     bar.close()

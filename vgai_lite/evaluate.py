@@ -147,8 +147,9 @@ class RelativeCost:
         ratio = (self.cost / self.expert_cost)[:k]
         return {"episodes": int(len(ratio)), "relative_cost": [round(float(x), 6) for x in ratio]}
 
-    def flocked(self) -> str:
-        """One line: velocity variance at each time read, and the share of connected swarms."""
+    def flocking_line(self) -> str:
+        """One line: velocity variance at each time read, and the share of connected swarms (whether
+        that counts as flocked is ``flocked(self.summary())``)."""
         if self.flocking is None:
             return "flocking figures not computed"
         var = ", ".join(f"{x:.1e} at {t:g} s" for t, x in self.flocking.median_variance().items())
@@ -165,16 +166,18 @@ class RelativeCost:
                 f"(expert {e.median_min_distance:.3f} m); episodes with a pair < 0.05 m: "
                 f"{s.share_below(0.05):.0%} (expert {e.share_below(0.05):.0%}), < 0.1 m: "
                 f"{s.share_below(0.1):.0%} (expert {e.share_below(0.1):.0%})"
-                + ("" if self.flocking is None else f"; {self.flocked()}"))
+                + ("" if self.flocking is None else f"; {self.flocking_line()}"))
 
 
-def relative_cost(controller: Callable, cfg: FlockConfig, episodes: int = 50, seed: int = 0,
+def relative_cost(controller: Callable, cfg: FlockConfig, episodes: int = 50, *, seed: int,
                   batch: int = 64, device=None, dtype: torch.dtype = torch.float32,
                   name: Optional[str] = None, flock_times: tuple = FLOCK_TIMES) -> RelativeCost:
     """Evaluate ``controller`` against the centralized expert on ``episodes`` initial conditions.
 
     The initial conditions come from ``sample_initial_state`` with ``torch.Generator`` seeded by
-    ``seed``: the same seed gives the same episodes for every controller. Episodes run ``batch`` at
+    ``seed``: the same seed gives the same episodes for every controller. ``seed`` has no default: say
+    which episodes you fly (``book.VALIDATION_SEED`` to choose, ``book.TEST_SEED`` to report,
+    ``book.WORKING_SEED`` to explore; a training's own seed would score it on its training episodes). Episodes run ``batch`` at
     a time (the controller is reset for each batch). The cost of eq. 1 and the closest approaches
     are those of the paper's episode, ``cfg.T`` steps; the controller's flights go on to the last
     of ``flock_times`` (seconds), where its flocking figures are read (``()``: none, T steps only).

@@ -16,6 +16,8 @@ import torch
 from .config import DISTANCE_FLOOR
 from .flocking import check_state, pairwise_offsets
 
+N_LOCAL_FEATURES = 6
+"""F of the DAGNN: the x and y of the three sums above."""
 FEATURE_NAMES = ("sum dv_x", "sum dv_y", "sum r_x/r^4", "sum r_y/r^4", "sum r_x/r^2", "sum r_y/r^2")
 
 

@@ -8,8 +8,8 @@ exercise 06.1), every visited state is labelled with the expert's action, and th
 rounds are aggregated.
 
 Here: the mixing rule, one DAgger flight (``fly_dagger``), the stored flights (``EpisodeStore``),
-one minibatch L1 fit loop (``fit_l1``), the validation record of a round, and one load-or-train
-contract (``load_or_train``). The trainings themselves are ``dagnn_training`` and ``vgai_training``.
+one minibatch L1 fit loop (``fit_l1``), the check a training logs after each round (``round_check``),
+and one load-or-train contract (``load_or_train``). The trainings themselves are ``dagnn_training`` and ``vgai_training``.
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ from .flocking import saturate, step
 
 log = logging.getLogger(__name__)
 
-VALIDATION_SEED_OFFSET = 1000
-"""Validation episodes use seed + 1000 (training draws from the seed itself, evaluation from
-``book.EVAL_SEED``)."""
+ROUND_CHECK_SEED_OFFSET = 1000
+"""A training's round checks fly the episodes of its seed + 1000 (its flights draw from the seed itself;
+the book's validation, test and working episodes from ``book``'s seeds, all above)."""
 
 
 def dagger_mix(u_learner: torch.Tensor, u_expert: torch.Tensor, p: float,
@@ -116,20 +116,21 @@ def fit_l1(model: torch.nn.Module, inputs: torch.Tensor, targets: torch.Tensor, 
     return losses
 
 
-def validation_record(learner, cfg: FlockConfig, episodes: int, seed: int, device=None) -> dict:
-    """The learner's relative cost (and close calls) on ``episodes`` validation episodes of
-    ``seed + VALIDATION_SEED_OFFSET``: what a training logs after each DAgger round (paper-length
-    episodes only: no flocking figures, which would cost 2.5 times the flying)."""
-    val = relative_cost(learner, cfg, episodes=episodes, seed=seed + VALIDATION_SEED_OFFSET, device=device,
+def round_check(learner, cfg: FlockConfig, episodes: int, seed: int, device=None) -> dict:
+    """What a training logs after each DAgger round: the learner's relative cost (and close calls) on
+    ``episodes`` episodes of ``seed + ROUND_CHECK_SEED_OFFSET`` (paper-length episodes only: no
+    flocking figures, which would cost 2.5 times the flying). Nothing is chosen on them."""
+    res = relative_cost(learner, cfg, episodes=episodes, seed=seed + ROUND_CHECK_SEED_OFFSET, device=device,
                         flock_times=())
-    return {"val_relative_cost": val.mean_ratio, "val_share_below_0.05m": val.safety.share_below(0.05)}
+    return {"check_relative_cost": res.mean_ratio, "check_share_below_0.05m": res.safety.share_below(0.05)}
 
 
 def load_or_train(path: Union[str, Path], cfg: FlockConfig, tcfg, train: Callable, retrain: bool = False,
                   **train_kwargs):
     """Load the controller at ``path`` if it was trained, to the end, with exactly ``cfg`` and
-    ``tcfg``; otherwise ``train(cfg, tcfg, checkpoint=path, **train_kwargs)`` (``train_dagnn``:
-    about half a minute; ``train_vgai``: about 25 minutes on two cores), which saves it there.
+    ``tcfg``; otherwise ``train(cfg, tcfg, checkpoint=path, **train_kwargs)`` (``train_dagnn``: a
+    minute or so; ``train_vgai``: most of an hour, its records in ``data/vgai/`` say how long each
+    took), which saves it there.
 
     Returns (controller, whether it was trained now); the training record is in ``controller.meta``.
     """

@@ -21,7 +21,7 @@ import torch
 
 from .aggregation import AggregationBuffer
 from .config import FlockConfig
-from .features import local_features, signed_log
+from .features import N_LOCAL_FEATURES, local_features, signed_log
 from .flocking import check_state, saturate
 from .graphs import DEFAULT_GSO, GSO_KINDS, adjacency, gso
 from .models import AggregationMLP, VGAIModel
@@ -67,7 +67,7 @@ class DAGNNController(_Learned):
         _check_gso(gso_kind)
         if feature_transform not in FEATURE_TRANSFORMS:
             raise ValueError(f"feature_transform must be one of {FEATURE_TRANSFORMS}, got {feature_transform!r}")
-        if model.F != 6:
+        if model.F != N_LOCAL_FEATURES:
             raise ValueError(f"the DAGNN uses the 6 exact local features, but the model expects F={model.F}")
         self.model, self.cfg = model, cfg
         self.gso_kind, self.feature_transform = gso_kind, feature_transform
@@ -131,8 +131,10 @@ class VGAIController(_Learned):
         self.buffer.reset()
         self.seen = []
 
-    def _remember(self, r: torch.Tensor, v) -> torch.Tensor:
-        """Store r and return the positions g steps ago (the oldest remembered, see VisionConfig)."""
+    def remember(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
+        """Advance the frame memory by one step: store r, return the positions g steps ago (the oldest
+        remembered; at an episode's first call, the initial state flown backwards, see VisionConfig).
+        Call it once per step (``observe`` does)."""
         g = self.vision.motion_gap
         if not self.seen and g > 0 and self.vision.prehistory:
             if v is None:
@@ -144,12 +146,18 @@ class VGAIController(_Learned):
             self.seen.pop(0)
         return self.seen[0]
 
-    def features(self, r: torch.Tensor, v: torch.Tensor = None, camera=None) -> torch.Tensor:
-        """X(t) from the agents' images, (B, N, F). ``camera(frame, lag)``: what the cameras do to
-        each raw frame before the CNN sees it (``vision.camera_input``); None: the training's cameras."""
+    def features(self, r: torch.Tensor, r_before: torch.Tensor, camera=None) -> torch.Tensor:
+        """X(t), (B, N, F), from the agents' images of the positions now and g steps before (pure: the
+        frame memory is not touched). ``camera(frame, lag)``: what the cameras do to each raw frame
+        before the CNN sees it (``vision.camera_input``); None: the training's cameras."""
         check_state(r)
-        images = camera_input(self.vision, self.cfg, r, self._remember(r, v), camera)
-        return self.model.features(images)
+        return self.model.features(camera_input(self.vision, self.cfg, r, r_before, camera))
+
+    def observe(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
+        """One step: advance the frame memory (``remember``), X(t) = CNN_Psi of the images, push X(t)
+        and S(t) into the buffer; returns Z(t), (B, N, K, F)."""
+        X = self.features(r, self.remember(r, v))
+        return self.buffer.push(X, gso(adjacency(r, self.cfg.R), self.gso_kind))
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:
         """u(t) = saturate(NN_Theta(Z(t))), (B, N, 2)."""

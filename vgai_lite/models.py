@@ -14,6 +14,8 @@ import torch
 import torch.nn.functional as nnf
 from torch import nn
 
+from .features import N_LOCAL_FEATURES
+
 
 
 class AggregationMLP(nn.Module):
@@ -108,9 +110,9 @@ class VisualCNN(nn.Module):
                                     ResidualBlock(w1, w2, (1, 3)), ResidualBlock(w2, w2, (1, 3)),
                                     ResidualBlock(w2, w2, (1, 3)))
         self.fc = nn.Sequential(nn.Flatten(), nn.Linear(w2 * width, hidden), nn.ReLU(), nn.Linear(hidden, F))
-        self.aux = nn.Linear(F, 6)
-        self.register_buffer("aux_mean", torch.zeros(6))  # scale of the exact features aux estimates
-        self.register_buffer("aux_std", torch.ones(6))
+        self.aux = nn.Linear(F, N_LOCAL_FEATURES)
+        self.register_buffer("aux_mean", torch.zeros(N_LOCAL_FEATURES))  # scale of the exact features aux estimates
+        self.register_buffer("aux_std", torch.ones(N_LOCAL_FEATURES))
 
     def spec(self) -> dict:
         """The architecture as plain values (F aside), as checkpoint files store it (``cnn_from_spec``)."""
@@ -187,7 +189,7 @@ class OddMotionCNN(VisualCNN):
         """The aux head on features x (M, F), (M, 6): the velocity outputs read only the odd features
         (no bias), the position outputs only the even ones."""
         odd = torch.arange(self.F, device=x.device) >= self.F - self.motion_features
-        vel = torch.arange(6, device=x.device) < 2
+        vel = torch.arange(N_LOCAL_FEATURES, device=x.device) < 2
         mask = (vel[:, None] == odd[None, :]).to(x.dtype)  # (6, F)
         return nnf.linear(x, self.aux.weight * mask, self.aux.bias * (~vel).to(x.dtype))
 

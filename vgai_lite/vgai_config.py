@@ -10,20 +10,15 @@ probability; every other field is our choice, explained beside it. The book's VG
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Optional
-
-import torch
 
 from .config import config_dict
 from .graphs import DEFAULT_GSO
 from .models import AggregationMLP, VGAIModel, visual_cnn
 from .vision import VisionConfig
 
-
-BOOK_ADDITIONS = ("synthetic_share", "motion_features", "aux_weight", "flight_steps", "mlp_on_exact",
-                  "anchor_weight", "joint_early_share", "learner_swarms")
-"""Fields the paper's VGAI does not have: 0 in ``PAPER``, stored by ``to_dict`` only when switched on."""
 
 @dataclass(frozen=True)
 class VGAITrainConfig:
@@ -38,16 +33,20 @@ class VGAITrainConfig:
         dagger_rounds, episodes_per_round, p_learner: DAgger rounds after the warm starts, new
             episodes per round, probability of following the learner at each step (paper: 0.33).
         warm_steps, warm_states: stage 1, gradient steps and swarm states (x N agents' images) per step.
-        mlp_epochs: stage 2, passes over the frozen-CNN dataset.
+        mlp_epochs, mlp_batch, mlp_late_stride: stage 2, passes over the frozen-CNN dataset, rows
+            (agent-steps) per gradient step, and the stride of the steps kept after ``early_steps``
+            (every early step, 1 in ``mlp_late_stride`` after: the expert's labels live early, as in
+            the DAGNN's ``keep_late`` = 0.25 and ``batch_size``).
         joint_steps, windows: stage 3, gradient steps per DAgger round and K-step windows per step.
         lr: Adam's learning rate (paper: 1e-3).
         early_steps, early_share: sampled states and window ends fall in the first ``early_steps``
             steps with probability ``early_share`` (the expert's labels live early).
         seed: seed of the training initial conditions, sampling and weights.
         synthetic_share: stage 1 shows this share of its states with synthetic relative velocities
-            (``state_estimation.synthetic_velocities``), from 0.01 to 1.5 m/s: the expert's own late
-            states have almost none to learn small motions from. Paper: 0; the book's recipe: 0.5
-            (notebook 06, section 6).
+            (``vgai_training.synthetic_velocities``): the expert's own late states have almost none
+            to learn small motions from. Paper: 0; the book's recipe: 0.5 (notebook 06, section 6).
+        synthetic_speeds: the range (m/s) of those synthetic per-agent velocity deviations, from
+            below the late-flight disagreements eq. 1 must remove to the early ones.
         motion_features: F_m, the CNN's last F_m features made odd in the motion channels
             (``VisualCNN``): exactly 0 when nothing moves relative to the drone, so a swarm moving
             as one reads as such. 0 (default): the paper's plain CNN. None (the book's recipe):
@@ -59,27 +58,11 @@ class VGAITrainConfig:
             loss alone, eq. 10, the paper's). The book's recipe: 5, which makes the two terms of similar size at the
             start of stage 3 (action L1 about 3 m/s², state-estimation L1 about 0.2, standardised).
 
-        flight_steps: steps of every stored flight (0: cfg.T, the paper's episode of 2 s). Stages 1
-            and 2 read the first cfg.T steps of each; stage 3 draws its windows over the whole
-            flight, so that the drifting a learner does after 2 s is labelled with the expert's
-            braking (an ablation of notebook 06: it did not make VGAI flock).
-        joint_early_share: stage 3's own early_share (0: early_share's), for its windows only, so that
-            stages 1 and 2 (and the cached stage 1) stay as they were.
         learner_swarms: the share of each DAgger round's swarms that the learner flies alone (p = 1
             at every step), the others under the paper's mixture (p_learner): the states the
             learner's own drifting leads to, late in a flight, labelled with the expert's braking.
             The book's recipe: 0.5, the one change that made VGAI flock (notebook 06: three training
             seeds, each with velocity variance at 5 s below the book's threshold; 0: the paper's mixture alone).
-        mlp_on_exact: stage 2 fits the MLP on the CNN's features corrected through the aux head
-            (``exact_through_aux``) so that they read as the exact local features, as the modular
-            vision pilot's MLP learned its response on exact features (an ablation of notebook 06).
-        anchor_weight: stage 3 adds this times the action loss of the MLP on those corrected
-            features (the CNN's features with their estimation error removed), which keeps the
-            MLP's response anchored to the exact-feature fit (an ablation of notebook 06).
-
-    ``to_dict`` stores the fields of ``BOOK_ADDITIONS`` only when switched on (not 0), so that the
-    paper's VGAI is written with the paper's fields alone, and a file or table cell is named by what
-    its training changed.
     """
 
     F: int = 24
@@ -96,6 +79,8 @@ class VGAITrainConfig:
     warm_steps: int = 3000
     warm_states: int = 8
     mlp_epochs: int = 4
+    mlp_batch: int = 1024
+    mlp_late_stride: int = 4
     joint_steps: int = 600
     windows: int = 4
     lr: float = 1e-3
@@ -103,42 +88,55 @@ class VGAITrainConfig:
     early_share: float = 0.75
     seed: int = 0
     synthetic_share: float = 0.0
+    synthetic_speeds: tuple = (0.01, 1.5)
     motion_features: Optional[int] = 0
     aux_weight: float = 0.0
-    flight_steps: int = 0
-    joint_early_share: float = 0.0
     learner_swarms: float = 0.0
-    mlp_on_exact: bool = False
-    anchor_weight: float = 0.0
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
             motion = self.vision.motion_gap > 0 and self.vision.motion_mode == "difference"
             object.__setattr__(self, "motion_features", self.F // 3 if motion else 0)
-        if not 0.0 <= self.synthetic_share <= 1.0:
-            raise ValueError(f"VGAITrainConfig: synthetic_share must be in [0, 1], got {self.synthetic_share!r}")
-        if not isinstance(self.flight_steps, int) or self.flight_steps < 0:
-            raise ValueError(f"VGAITrainConfig: flight_steps must be an integer >= 0 (0: the episode's T), "
-                             f"got {self.flight_steps!r}")
-        if self.anchor_weight < 0:
-            raise ValueError(f"VGAITrainConfig: anchor_weight must be >= 0, got {self.anchor_weight!r}")
+        for name in ("F", "K", "cnn_hidden", "expert_episodes", "episodes_per_round", "warm_steps", "warm_states",
+                     "mlp_epochs", "mlp_batch", "mlp_late_stride", "joint_steps", "windows", "early_steps"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"VGAITrainConfig: {name} must be a whole number >= 1, got {value!r}")
+        for name in ("dagger_rounds", "seed", "motion_features"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+                raise ValueError(f"VGAITrainConfig: {name} must be a whole number >= 0, got {value!r}")
+        for name in ("p_learner", "early_share", "synthetic_share", "learner_swarms"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"VGAITrainConfig: {name} is a probability, in [0, 1]; got {getattr(self, name)!r}")
+        if not self.lr > 0 or not self.aux_weight >= 0:
+            raise ValueError(f"VGAITrainConfig: lr must be > 0 and aux_weight >= 0, got {self.lr!r}, {self.aux_weight!r}")
+        lo, hi = self.synthetic_speeds
+        if not 0 < lo < hi:
+            raise ValueError(f"VGAITrainConfig: synthetic_speeds must be (low, high) m/s with 0 < low < high, "
+                             f"got {self.synthetic_speeds!r}")
+        if self.motion_features > self.F:
+            raise ValueError(f"VGAITrainConfig: motion_features ({self.motion_features}) cannot exceed F ({self.F})")
         if self.motion_features and (self.vision.motion_gap == 0 or self.vision.motion_mode != "difference"):
             raise ValueError("VGAITrainConfig: motion_features needs a motion frame in the 'difference' mode "
                              f"(got motion_gap={self.vision.motion_gap}, motion_mode={self.vision.motion_mode!r})")
 
     def to_dict(self) -> dict:
-        d = config_dict(self)
-        for addition in BOOK_ADDITIONS:
-            if d[addition] == 0:
-                del d[addition]
-        return d
+        """Every field as plain values: what a checkpoint stores and a cache key hashes."""
+        return config_dict(self)
 
     @staticmethod
     def from_dict(d: dict) -> "VGAITrainConfig":
-        """The inverse of ``to_dict`` (the book's additions, absent when 0, come back as 0)."""
-        d = {**{k: 0 for k in BOOK_ADDITIONS}, **d}
-        d["vision"] = VisionConfig.from_dict(d["vision"])
-        d["hidden"], d["cnn_widths"] = tuple(d["hidden"]), tuple(d["cnn_widths"])
+        """The inverse of ``to_dict``. Every field must be there, and no other: a file that differs was
+        written by another version of the training, whose behaviour this class may not reproduce."""
+        names = {f.name for f in dataclasses.fields(VGAITrainConfig)}
+        missing, unknown = sorted(names - set(d)), sorted(set(d) - names)
+        if missing or unknown:
+            raise ValueError(f"a VGAI training configuration lacks {missing} and has unknown fields {unknown}: "
+                             "it was written by another version of vgai_lite; train the model again")
+        d = {**d, "vision": VisionConfig.from_dict(d["vision"])}
+        for name in ("hidden", "cnn_widths", "synthetic_speeds"):
+            d[name] = tuple(d[name])
         return VGAITrainConfig(**d)
 
     def new_model(self) -> VGAIModel:
@@ -165,11 +163,3 @@ def book_recipe(**fields) -> VGAITrainConfig:
 BOOK = book_recipe()
 """The book's VGAI at the paper's default F = 24, K - 1 = 3."""
 
-
-def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator, share: float = 0.0) -> torch.Tensor:
-    """n time steps in [0, T): in the first ``early_steps`` with probability ``share`` (0: the
-    config's ``early_share``), else uniform."""
-    early = torch.rand(n, generator=g) < (share or tcfg.early_share)
-    t_early = torch.randint(0, min(tcfg.early_steps, T), (n,), generator=g)
-    t_any = torch.randint(0, T, (n,), generator=g)
-    return torch.where(early, t_early, t_any)

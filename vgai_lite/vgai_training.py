@@ -1,126 +1,159 @@
-"""Training VGAI: the CNN and the aggregation MLP together, by imitation with DAgger and K-step BPTT.
+"""Training VGAI, top to bottom: the CNN and the aggregation MLP together, by imitation with DAgger and
+K-step BPTT. Its configuration (every knob, with the paper's values) is ``vgai_config.VGAITrainConfig``.
 
 Introduced in notebook 06. Images are rendered on the fly from stored swarm states (no image dataset
 on disk; ``vision.stored_images``). The paper trains CNN_Psi and NN_Theta jointly end to end, by
 K-step backpropagation through time (its figure 3): for a window of K consecutive steps, every
 agent's K images go through the CNN, the features travel through the delayed aggregation (eq. 6),
-the MLP acts once at the last step, and the L1 loss against the expert's action flows back through
-all K CNN passes (``bptt_loss``).
+the MLP acts once at the last step, and the L1 loss of eq. 10 against the expert's action flows back
+through all K CNN passes (``bptt_loss``).
 
 The paper is silent on how long to train and on warm starts. Ours, in three stages, to train in
-minutes on two CPU cores (``train_vgai``):
-  1. visual state estimation (``state_estimation.fit_state_estimator``): the CNN (through a linear
-     head) regresses the DAGNN's 6 exact local features from single agents' images;
+minutes on two CPU cores (``train_vgai``, at the bottom of this file):
+  0. the expert flies ``expert_episodes`` swarms alone (DAgger's round 0, ``imitation.EpisodeStore``);
+  1. visual state estimation (``fit_state_estimator``): the CNN, through a linear head, regresses the
+     DAGNN's N_LOCAL_FEATURES = 6 exact local features from single agents' images;
   2. ``fit_mlp``: the MLP is fitted on Z(t) built from the (frozen) CNN's features, like the DAGNN;
-  3. ``joint_round``: joint K-step BPTT of both on windows, after each DAgger round (learner
-     followed with probability 0.33) has added the learner's own states.
-Loss L1 (eq. 10) and Adam at learning rate 1e-3 (the paper's) in every stage.
+  3. ``joint_round``: joint K-step BPTT of both on windows (``sample_windows``, ``window_batch``,
+     ``bptt_loss``), after each DAgger round has added the learner's own flights.
+Loss L1 (eq. 10) and Adam at learning rate 1e-3 (the paper's) in every stage. Randomness comes from
+one ``torch.Generator`` seeded with ``tcfg.seed`` (sampling) and the seeded global RNG (the weights).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import time
 from pathlib import Path
-from typing import Optional, Union
+from typing import Callable, Optional, Union
 
 import torch
 import torch.nn.functional as nnf
 from tqdm.auto import tqdm
 
 from .aggregation import aggregation_sequence
-from .checkpoints import load_stage1, save_controller, save_stage1, stage1_file
+from .checkpoints import save_controller
 from .config import FlockConfig
-from .features import local_features
+from .features import N_LOCAL_FEATURES, local_features
 from .flocking import sample_initial_state
 from .graphs import adjacency, gso
-from .imitation import EpisodeStore, fit_l1, validation_record
+from .imitation import EpisodeStore, fit_l1, round_check
 from .learned_controllers import VGAIController
-from .models import VGAIModel
-from .state_estimation import fit_state_estimator
-from .vgai_config import VGAITrainConfig, sample_times
-from .vision import stored_images
+from .models import VGAIModel, VisualCNN
+from .vgai_config import VGAITrainConfig
+from .vision import camera_input, flown_backwards, positions_before, stored_images
 
 log = logging.getLogger(__name__)
 
-MLP_LATE_STRIDE = 4
-"""Stage 2 keeps every step of the first ``early_steps`` of each flight and 1 step in 4 after: the
-expert's labels live early (as the DAGNN's ``keep_late`` = 0.25)."""
-MLP_BATCH = 1024
-"""Rows (agent-steps) per gradient step of stage 2 (as the DAGNN's ``batch_size``)."""
+
+def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> torch.Tensor:
+    """n time steps in [0, T): in the first ``tcfg.early_steps`` with probability ``tcfg.early_share``
+    (the expert's labels live early: most of eq. 1 accrues in the first 20 steps), else uniform."""
+    early = torch.rand(n, generator=g) < tcfg.early_share
+    t_early = torch.randint(0, min(tcfg.early_steps, T), (n,), generator=g)
+    t_any = torch.randint(0, T, (n,), generator=g)
+    return torch.where(early, t_early, t_any)
 
 
-def stage1_identity(cfg: FlockConfig, tcfg: VGAITrainConfig) -> dict:
-    """What stage 1 depends on (not K, the MLP or the DAgger schedule): runs that agree on it train
-    the very same stage-1 CNN, and share it through the cache."""
-    t = tcfg.to_dict()
-    fields = ("F", "cnn_widths", "cnn_hidden", "vision", "expert_episodes", "warm_steps", "warm_states",
-              "lr", "early_steps", "early_share", "seed", "synthetic_share", "motion_features")
-    return {"config": cfg.to_dict(), "train": {k: t[k] for k in fields if k in t}}
+# ---------------------------------------------------------------------------------------------
+# Stage 1: visual state estimation (section 3.3; notebook 05)
 
 
-def stage1_cache_file(folder: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrainConfig) -> Path:
-    return stage1_file(folder, stage1_identity(cfg, tcfg), tcfg.F)
+def feature_scale(cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Mean and spread of the 6 exact local features over stored states r, v (T, E, N, 2): (6,), (6,)."""
+    X = local_features(r.flatten(0, 1), v.flatten(0, 1), cfg.R)
+    return X.mean((0, 1)), X.std((0, 1)).clamp(min=1e-6)
 
 
-def cached_stage1(cnn, cfg, tcfg, r, v, gen, progress, cache: Optional[Union[str, Path]]) -> dict:
-    """Stage 1, read from ``cache`` when this exact stage 1 was trained before (the CNN and the
-    sampling generator restored as they were at its end), else trained and written there.
-    Returns the history entries of stage 1."""
-    path = stage1_cache_file(cache, cfg, tcfg) if cache is not None else None
-    if path is not None and path.is_file():
-        return {**load_stage1(path, cnn, gen), "stage1_cached": path.name}
+def synthetic_velocities(v: torch.Tensor, speeds: tuple, gen: torch.Generator) -> torch.Tensor:
+    """Velocities a swarm could have: its mean velocity plus independent per-agent deviations of a
+    scale drawn log-uniformly in ``speeds`` = (low, high) m/s, one scale per swarm. v (M, N, 2) -> (M, N, 2)."""
+    lo, hi = speeds
+    scale = torch.empty(v.shape[0], 1, 1).uniform_(math.log(lo), math.log(hi), generator=gen).exp()
+    return v.mean(1, keepdim=True) + scale * torch.randn(v.shape, generator=gen)
+
+
+def estimation_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
+                     gen: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
+    """``tcfg.warm_states`` stored swarm states of flights r, v (T, E, N, 2): every agent's image
+    (M, N, C, H, W) and its exact local features (M, N, 6). A ``tcfg.synthetic_share`` of them is shown
+    with synthetic velocities (the motion frame drawn from the state flown backwards at them)."""
+    T, E = r.shape[:2]
+    vision, states = tcfg.vision, tcfg.warm_states
+    e = torch.randint(0, E, (states,), generator=gen)
+    t = sample_times(states, T, tcfg, gen)
+    if tcfg.synthetic_share <= 0:
+        return stored_images(vision, cfg, r, v, e, t), local_features(r[t, e], v[t, e], cfg.R)
+    synth = (torch.rand(states, generator=gen) < tcfg.synthetic_share)[:, None, None]
+    vs = torch.where(synth, synthetic_velocities(v[t, e], tcfg.synthetic_speeds, gen), v[t, e])
+    before = torch.where(synth, flown_backwards(r[t, e], vs, vision.motion_gap, cfg.Ts),
+                         positions_before(vision, cfg, r, v, e, t))
+    return camera_input(vision, cfg, r[t, e], before), local_features(r[t, e], vs, cfg.R)
+
+
+def estimation_loss(cnn: VisualCNN, X: torch.Tensor, x_exact: torch.Tensor) -> torch.Tensor:
+    """The state-estimation loss: L1 between the aux head's reading of the CNN's features X (..., F)
+    and the standardised exact local features x_exact (..., 6)."""
+    target = (x_exact - cnn.aux_mean) / cnn.aux_std
+    return nnf.l1_loss(cnn.aux_standardized(X.reshape(-1, cnn.F)), target.reshape(-1, N_LOCAL_FEATURES))
+
+
+def fit_state_estimator(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor,
+                        v: torch.Tensor, gen: torch.Generator, progress: bool = True) -> list:
+    """Stage 1: train the CNN (through its ``aux`` head) to regress the standardised exact local
+    features of every agent from its own images (``tcfg.vision``), on stored states r, v (T, E, N, 2):
+    ``tcfg.warm_steps`` Adam steps on ``estimation_batch``. Returns the L1 loss per step."""
+    x_mean, x_std = feature_scale(cfg, r, v)
+    if cnn.motion_features:  # the odd velocity estimates are 0 when nothing moves, so is their offset
+        x_mean[:2] = 0.0
+    cnn.aux_mean.copy_(x_mean), cnn.aux_std.copy_(x_std)
+    opt = torch.optim.Adam(cnn.parameters(), lr=tcfg.lr)
+    cnn.train()
+    losses = []
+    for _ in tqdm(range(tcfg.warm_steps), desc="stage 1: visual state estimation", disable=not progress):
+        img, x_exact = estimation_batch(cfg, tcfg, r, v, gen)
+        loss = estimation_loss(cnn, cnn(img.flatten(0, 1)), x_exact)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    cnn.eval()
+    return losses
+
+
+def fit_stage1(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
+               gen: torch.Generator, progress: bool = True) -> dict:
+    """Stage 1 as ``train_vgai`` runs it: ``fit_state_estimator``, timed. Returns its history entries.
+    (A caller may pass ``train_vgai`` another function of this signature, e.g. one that reads a stage 1
+    trained before: ``vgai_lite.lab.stage1_cache``.)"""
     start = time.perf_counter()
-    record = {"warm_loss": fit_state_estimator(cnn, tcfg.vision, cfg, r, v, tcfg.warm_steps, tcfg.warm_states,
-                                               tcfg, gen, progress, tcfg.synthetic_share)}
-    record["stage1_seconds"] = time.perf_counter() - start
-    if path is not None:
-        save_stage1(path, stage1_identity(cfg, tcfg), cnn, gen, record)
-    return record
+    losses = fit_state_estimator(cnn, cfg, tcfg, r, v, gen, progress)
+    return {"warm_loss": losses, "stage1_seconds": time.perf_counter() - start}
 
 
 # ---------------------------------------------------------------------------------------------
 # Stage 2: the MLP on the frozen CNN's features
 
 
-def exact_through_aux(cnn, X: torch.Tensor, r: torch.Tensor, v: torch.Tensor, R: float) -> torch.Tensor:
-    """The CNN's features X (..., N, F) of states r, v (..., N, 2) with their estimation error removed:
-    the features closest to X that the aux head reads as the exact local features,
-
-        X* = X + A^+ (x_exact - aux(X)),   A the aux head's (masked) weight, A^+ its pseudo-inverse,
-
-    so aux(X*) = x_exact (standardised) and the part of X the aux head does not read stays the CNN's.
-    With odd motion features A is block-diagonal (velocities from odd features only), so is A^+: the
-    velocity error is removed from the odd features, the position error from the even ones."""
-    N = r.shape[-2]
-    exact = local_features(r.reshape(-1, N, 2), v.reshape(-1, N, 2), R).view(*r.shape[:-1], 6)
-    target = (exact - cnn.aux_mean) / cnn.aux_std
-    eye = torch.eye(cnn.F, dtype=X.dtype, device=X.device)
-    A = cnn.aux_standardized(eye).T - cnn.aux_standardized(torch.zeros_like(eye[:1])).T  # (6, F)
-    return X + (target - cnn.aux_standardized(X.flatten(0, -2)).view_as(target)) @ torch.linalg.pinv(A).T
-
-
 def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
             u: torch.Tensor, gen: torch.Generator, progress: bool = True) -> list:
     """Fit NN_Theta on Z(t) built from the frozen CNN's features along stored flights r, v, u*
-    (T, E, N, 2), like the DAGNN on its exact features (with ``tcfg.mlp_on_exact``, on those features
-    read as the exact ones, ``exact_through_aux``). Returns the mean L1 loss per epoch."""
+    (T, E, N, 2), like the DAGNN on its exact features. Returns the mean L1 loss per epoch."""
     T, E = r.shape[:2]
     model.eval()
     with torch.no_grad():
         S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
         X = torch.stack([model.features(stored_images(tcfg.vision, cfg, r, v, torch.arange(E), torch.full((E,), t)))
                          for t in range(T)])  # (T, E, N, F)
-        if tcfg.mlp_on_exact:
-            X = exact_through_aux(model.cnn, X, r, v, cfg.R)
         Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
     early = min(tcfg.early_steps, T)
-    keep_t = torch.cat((torch.arange(early), torch.arange(early, T, MLP_LATE_STRIDE)))
+    keep_t = torch.cat((torch.arange(early), torch.arange(early, T, tcfg.mlp_late_stride)))
     Zr = Z[:, keep_t].reshape(-1, tcfg.K, tcfg.F)
     Ur = u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
     model.mlp.set_normalization(Zr)
     opt = torch.optim.Adam(model.mlp.parameters(), lr=tcfg.lr)
-    return fit_l1(model.mlp, Zr, Ur, opt, tcfg.mlp_epochs, MLP_BATCH, gen,
+    return fit_l1(model.mlp, Zr, Ur, opt, tcfg.mlp_epochs, tcfg.mlp_batch, gen,
                   desc="stage 2: MLP on CNN features", progress=progress)
 
 
@@ -128,48 +161,87 @@ def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.
 # Stage 3: joint K-step BPTT (the paper's figure 3)
 
 
-def bptt_loss(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
-              u: torch.Tensor, gen: torch.Generator, camera=None) -> torch.Tensor:
-    """The L1 loss of one joint step on ``tcfg.windows`` windows of K steps drawn from stored flights
-    r, v, u* (T, E, N, 2). Every agent's K images of a window go through the CNN, the features
-    through the unrolled aggregation (eq. 6), the MLP acts once at the window's last step; calling
-    ``backward`` on the result is K-step BPTT. Steps before t = 0 contribute nothing (X = 0, S = 0).
-    With ``tcfg.aux_weight`` > 0 the loss adds that times stage 1's state-estimation loss on the
-    window's images (``VisualCNN.aux_standardized`` against the standardised exact features).
-    ``camera``: what the cameras do to the raw frames (``vision.camera_input``), e.g. noise augmentation."""
-    T, E = r.shape[:2]
-    K, M = tcfg.K, tcfg.windows
-    e = torch.randint(0, E, (M,), generator=gen)
-    t_end = sample_times(M, T, tcfg, gen, tcfg.joint_early_share)
+def bptt_loss(model, images: torch.Tensor, S: torch.Tensor, u_star: torch.Tensor,
+              valid: Optional[torch.Tensor] = None) -> torch.Tensor:
+    """Eq. 10 through the paper's figure 3: the L1 imitation loss of M windows of K steps.
+
+    images (M, K, N, ...): every agent's CNN input at the window's K steps, oldest first;
+    S (M, K, N, N): the GSOs at those steps; u_star (M, N, 2): the expert's action at each window's
+    last step; valid (M, K), optional: False at steps before the flight began, which contribute
+    nothing (their X and S are 0). ``model`` has ``cnn`` (inputs (P, ...) -> features (P, F)) and
+    ``mlp`` (Z (M, N, K, F) -> actions (M, N, 2)).
+
+        X(tau) = CNN_Psi(H(tau))  at every step of the window,
+        Z(t)   = [X(t), S(t) X(t-1), ..., S(t)...S(t-K+2) X(t-K+1)]   (eq. 6, unrolled),
+        loss   = mean |NN_Theta(Z(t)) - u*(t)|                          (eq. 10).
+
+    ``loss.backward()`` is K-step BPTT: through the MLP once and through the CNN at all K steps."""
+    return window_action_loss(model.mlp, window_features(model.cnn, images), S, u_star, valid)
+
+
+def window_features(cnn, images: torch.Tensor) -> torch.Tensor:
+    """X = CNN_Psi(H) at every step of every window: images (M, K, N, ...) -> (M, K, N, F)."""
+    M, K, N = images.shape[:3]
+    return cnn(images.flatten(0, 2)).view(M, K, N, -1)
+
+
+def window_action_loss(mlp, X: torch.Tensor, S: torch.Tensor, u_star: torch.Tensor,
+                       valid: Optional[torch.Tensor] = None) -> torch.Tensor:
+    """The second half of ``bptt_loss``, from the windows' features X (M, K, N, F) on."""
+    K = X.shape[1]
+    if valid is not None:
+        mask = valid.to(X.dtype)[:, :, None, None]
+        X, S = X * mask, S * mask
+    return nnf.l1_loss(mlp(aggregation_sequence(X, S, K)[:, -1]), u_star)
+
+
+def sample_windows(T: int, E: int, tcfg: VGAITrainConfig, gen: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
+    """``tcfg.windows`` windows of stored flights (E episodes of T steps): each window's episode e and
+    last step t_end, (M,) each; the last steps drawn by ``sample_times``."""
+    e = torch.randint(0, E, (tcfg.windows,), generator=gen)
+    return e, sample_times(tcfg.windows, T, tcfg, gen)
+
+
+def window_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor, u: torch.Tensor,
+                 e: torch.Tensor, t_end: torch.Tensor, camera=None) -> dict:
+    """What ``bptt_loss`` needs of the windows (e, t_end) of stored flights r, v, u* (T, E, N, 2):
+    ``images`` (M, K, N, C, H, W), ``S`` (M, K, N, N), ``u_star`` (M, N, 2), ``valid`` (M, K), and
+    the exact local features at every step, ``x_exact`` (M, K, N, 6). Steps before t = 0 are
+    rendered at t = 0 and marked invalid. ``camera``: what the cameras do to the raw frames
+    (``vision.camera_input``)."""
+    M, K = len(e), tcfg.K
     tau = t_end[:, None] - (K - 1) + torch.arange(K)  # (M, K) times of the window
-    valid = (tau >= 0).float()[:, :, None, None]
     tau_c, ee = tau.clamp(min=0).flatten(), e[:, None].expand_as(tau).flatten()
-    X = model.features(stored_images(tcfg.vision, cfg, r, v, ee, tau_c, camera)).view(M, K, cfg.N, tcfg.F)
-    S = gso(adjacency(r[tau_c, ee], cfg.R), tcfg.gso).view(M, K, cfg.N, cfg.N) * valid
-    Z = aggregation_sequence(X * valid, S, K)[:, -1]  # Z(t) at the window's last step, (M, N, K, F)
-    loss = nnf.l1_loss(model.mlp(Z), u[t_end, e])
-    if tcfg.anchor_weight:  # the MLP's response to the same windows read as exact features
-        Xa = exact_through_aux(model.cnn, X.detach(), r[tau_c, ee].view(M, K, cfg.N, 2),
-                               v[tau_c, ee].view(M, K, cfg.N, 2), cfg.R)
-        Za = aggregation_sequence(Xa * valid, S, K)[:, -1]
-        loss = loss + tcfg.anchor_weight * nnf.l1_loss(model.mlp(Za), u[t_end, e])
+    images = stored_images(tcfg.vision, cfg, r, v, ee, tau_c, camera)
+    return {"images": images.view(M, K, *images.shape[1:]),
+            "S": gso(adjacency(r[tau_c, ee], cfg.R), tcfg.gso).view(M, K, cfg.N, cfg.N),
+            "u_star": u[t_end, e], "valid": tau >= 0,
+            "x_exact": local_features(r[tau_c, ee], v[tau_c, ee], cfg.R).view(M, K, cfg.N, N_LOCAL_FEATURES)}
+
+
+def joint_loss(model: VGAIModel, tcfg: VGAITrainConfig, w: dict) -> torch.Tensor:
+    """The loss of one joint step on a ``window_batch`` w: ``bptt_loss`` (eq. 10), plus, with
+    ``tcfg.aux_weight`` > 0, that times stage 1's ``estimation_loss`` on the same images (so that joint
+    training keeps the CNN's features readable as the local features; the book's recipe). The CNN
+    runs once: both terms read the same features."""
+    X = window_features(model.cnn, w["images"])
+    loss = window_action_loss(model.mlp, X, w["S"], w["u_star"], w["valid"])  # = bptt_loss(model, ...)
     if tcfg.aux_weight:
-        cnn = model.cnn
-        target = (local_features(r[tau_c, ee], v[tau_c, ee], cfg.R) - cnn.aux_mean) / cnn.aux_std
-        loss = loss + tcfg.aux_weight * nnf.l1_loss(cnn.aux_standardized(X.flatten(0, 2)), target.flatten(0, 1))
+        loss = loss + tcfg.aux_weight * estimation_loss(model.cnn, X, w["x_exact"])
     return loss
 
 
 def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, tcfg: VGAITrainConfig,
                 store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True, camera=None) -> list:
     """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights (images through
-    ``camera`` when given, see ``bptt_loss``). Returns the losses."""
+    ``camera`` when given, see ``window_batch``). Returns the losses."""
     r, v, u = store.tensors()
     model.train()
     losses = []
     bar = tqdm(range(tcfg.joint_steps), desc=desc, disable=not progress)
     for _ in bar:
-        loss = bptt_loss(model, cfg, tcfg, r, v, u, gen, camera)
+        e, t_end = sample_windows(r.shape[0], r.shape[1], tcfg, gen)
+        loss = joint_loss(model, tcfg, window_batch(cfg, tcfg, r, v, u, e, t_end, camera))
         opt.zero_grad(set_to_none=True)
         loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
         opt.step()
@@ -179,72 +251,72 @@ def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, 
     return losses
 
 
+def dagger_round(learner: VGAIController, store: EpisodeStore, cfg: FlockConfig, tcfg: VGAITrainConfig,
+                 gen: torch.Generator) -> None:
+    """One DAgger round's flights, added to ``store``: ``tcfg.episodes_per_round`` swarms, a
+    ``tcfg.learner_swarms`` share of them flown by the learner alone (p = 1), the others under the
+    paper's mixture (the learner followed with probability ``tcfg.p_learner`` at each step)."""
+    learner.model.eval()
+    p = tcfg.p_learner
+    if tcfg.learner_swarms:
+        alone = torch.rand(tcfg.episodes_per_round, generator=gen) < tcfg.learner_swarms
+        p = torch.where(alone, 1.0, tcfg.p_learner)
+    store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), p, gen)
+
+
 # ---------------------------------------------------------------------------------------------
 # The three stages together
 
 
 def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
                checkpoint: Optional[Union[str, Path]] = None, progress: bool = True,
-               validation_episodes: int = 10, stage1_cache: Optional[Union[str, Path]] = None
-               ) -> tuple[VGAIController, dict]:
+               check_episodes: int = 10, stage1: Callable = fit_stage1) -> tuple[VGAIController, dict]:
     """Train VGAI in the three stages of the module docstring; save to ``checkpoint`` as it goes.
 
-    ``stage1_cache``: a folder where the CNN at the end of stage 1 is kept, keyed by what stage 1
-    depends on (:func:`stage1_identity`); a run that finds its stage 1 there skips it and continues
-    exactly as if it had trained it (the K = 2, 3, 4 runs of Table 1b share one). The history then
-    says ``stage1_cached`` and keeps the seconds the cached stage 1 took when it was trained.
+    ``stage1``: the function that runs stage 1 (``fit_stage1``'s signature, returning its history
+    entries); ``vgai_lite.lab.stage1_cache`` passes one that reads a stage 1 trained before.
 
-    Returns the controller and its history: per stage the losses, and per DAgger round the
-    validation relative cost (seed + 1000) with the seconds elapsed. The global torch RNG is left
-    as it was.
+    Returns the controller and its history: per stage the losses, and after stages 1-2 and every
+    DAgger round the relative cost on ``check_episodes`` episodes of the round check
+    (``imitation.round_check``) with the seconds elapsed. The global torch RNG is left as it was.
     """
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(tcfg.seed)  # the weights' initialisation
-        return _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cache)
+        gen = torch.Generator().manual_seed(tcfg.seed)  # every draw of the training
+        model = tcfg.new_model()
+        learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
+        history = {"warm_loss": [], "mlp_loss": [], "joint_loss": [], "rounds": []}
+        start = time.perf_counter()
 
+        def save(finished: bool = False) -> None:
+            history["seconds"] = time.perf_counter() - start
+            learner.meta = {"train_config": tcfg.to_dict(), "history": history, "finished": finished}
+            if checkpoint is not None:
+                save_controller(checkpoint, learner, meta=learner.meta)
 
-def _train_vgai(cfg, tcfg, checkpoint, progress, validation_episodes, stage1_cache):
-    gen = torch.Generator().manual_seed(tcfg.seed)
-    model = tcfg.new_model()
-    learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
-    history = {"warm_loss": [], "mlp_loss": [], "joint_loss": [], "rounds": []}
-    start = time.perf_counter()
-    store = EpisodeStore()
+        def check(stage: str) -> None:
+            model.eval()
+            history["rounds"].append({"stage": stage, "episodes": store.episodes,
+                                      **round_check(learner, cfg, check_episodes, tcfg.seed),
+                                      "seconds": time.perf_counter() - start})
+            log.info("%s: round-check relative cost %.2f after %.0f s", stage,
+                     history["rounds"][-1]["check_relative_cost"], time.perf_counter() - start)
+            save()
 
-    def save(finished: bool = False) -> None:
-        history["seconds"] = time.perf_counter() - start
-        learner.meta = {"train_config": tcfg.to_dict(), "history": history, "finished": finished}
-        if checkpoint is not None:
-            save_controller(checkpoint, learner, meta=learner.meta)
+        # Round 0: the expert flies alone; stages 1 and 2 learn from its flights.
+        store = EpisodeStore()
+        store.fly(None, cfg, *sample_initial_state(cfg, tcfg.expert_episodes, gen), 0.0, gen)
+        r, v, u = store.tensors()
+        history.update(stage1(model.cnn, cfg, tcfg, r, v, gen, progress))
+        history["mlp_loss"] = fit_mlp(model, cfg, tcfg, r, v, u, gen, progress)
+        check("after stages 1-2")
 
-    def validate(stage: str) -> None:
-        model.eval()
-        history["rounds"].append({"stage": stage, "episodes": store.episodes,
-                                  **validation_record(learner, cfg, validation_episodes, tcfg.seed),
-                                  "seconds": time.perf_counter() - start})
-        log.info("%s: validation relative cost %.2f after %.0f s", stage,
-                 history["rounds"][-1]["val_relative_cost"], time.perf_counter() - start)
-        save()
-
-    # Round 0: the expert flies alone; stages 1 and 2 learn from its flights (their first T steps).
-    steps = tcfg.flight_steps or cfg.T
-    store.fly(None, cfg, *sample_initial_state(cfg, tcfg.expert_episodes, gen), 0.0, gen, steps)
-    r, v, u = (x[:cfg.T] for x in store.tensors())
-    history.update(cached_stage1(model.cnn, cfg, tcfg, r, v, gen, progress, stage1_cache))
-    history["mlp_loss"] = fit_mlp(model, cfg, tcfg, r, v, u, gen, progress)
-    validate("after stages 1-2")
-
-    # Stage 3: each DAgger round adds the learner's own flights, then joint K-step BPTT on all.
-    opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
-    for rnd in range(tcfg.dagger_rounds):
-        model.eval()
-        p = tcfg.p_learner
-        if tcfg.learner_swarms:  # some swarms flown by the learner alone
-            alone = torch.rand(tcfg.episodes_per_round, generator=gen) < tcfg.learner_swarms
-            p = torch.where(alone, 1.0, tcfg.p_learner)
-        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), p, gen, steps)
-        history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
-                                             desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}")
-        validate(f"DAgger round {rnd + 1}")
-    save(finished=True)
-    return learner, history
+        # Stage 3: each DAgger round adds the learner's own flights, then joint K-step BPTT on all.
+        opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
+        for rnd in range(tcfg.dagger_rounds):
+            dagger_round(learner, store, cfg, tcfg, gen)
+            history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
+                                                 desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}")
+            check(f"DAgger round {rnd + 1}")
+        save(finished=True)
+        return learner, history

@@ -5,7 +5,7 @@ single frame shows positions only; the expert's action is dominated by velocity 
 camera sees only across frames, so the CNN's input pairs the frame of now with the frame of g steps
 ago:
 
-    H_i(t) = [ I_i(t), MOTION_SCALE (I_i(t) - I_i(t - g)) ]        (motion_mode "difference")
+    H_i(t) = [ I_i(t), s (I_i(t) - I_i(t - g)) ]        (motion_mode "difference", s = motion_scale)
 
 Both the controller (one step at a time, ``learned_controllers.VGAIController``) and the training
 (K-step windows cut from stored flights, ``vgai_training``) call :func:`camera_input` with the
@@ -29,12 +29,6 @@ from .render import RenderConfig, render_egocentric, render_topdown, with_motion
 VIEWS = ("egocentric", "topdown")
 MOTION_MODES = ("difference", "stack")
 
-MOTION_SCALE = 5.0
-"""Gain on the frame difference I(t) - I(t - g) (motion_mode "difference"): with g = 5 steps a
-neighbour's image moves a fraction of a column between the frames, so the raw difference is small
-next to I(t); 5 brings the two channels to comparable ranges for the CNN's first layer."""
-
-
 @dataclass(frozen=True)
 class VisionConfig:
     """How a VGAI agent turns the world into the CNN's input (our choices; the paper renders one
@@ -47,7 +41,11 @@ class VisionConfig:
         motion_gap: g, the frame the current one is paired with is g steps old (0: a single frame).
             A single frame shows positions only; the expert's action is dominated by velocity
             alignment, visible only across frames.
-        motion_mode: "difference" ([I(t), MOTION_SCALE (I(t) - I(t-g))]) or "stack" ([I(t), I(t-g)]).
+        motion_mode: "difference" ([I(t), s (I(t) - I(t-g))]) or "stack" ([I(t), I(t-g)]).
+        motion_scale: s, the gain on the frame difference (mode "difference"): with g = 5 steps a
+            neighbour's image moves a fraction of a column between the frames, so the raw difference
+            is small next to I(t); 5 brings the two channels to comparable ranges for the CNN's
+            first layer.
         prehistory: the episode starts mid-flight, with the cameras already running: the frames
             before t = 0 are rendered from the initial state flown backwards at its constant initial
             velocity, r(-k) = r(0) - k Ts v(0). Without it an agent is blind to motion for its first
@@ -60,6 +58,7 @@ class VisionConfig:
     render: RenderConfig = RenderConfig()
     motion_gap: int = 5
     motion_mode: str = "difference"
+    motion_scale: float = 5.0
     prehistory: bool = True
 
     def __post_init__(self) -> None:
@@ -69,6 +68,8 @@ class VisionConfig:
             raise ValueError(f"VisionConfig: motion_gap must be an integer >= 0, got {self.motion_gap!r}")
         if self.motion_mode not in MOTION_MODES:
             raise ValueError(f"VisionConfig: motion_mode must be one of {MOTION_MODES}, got {self.motion_mode!r}")
+        if not self.motion_scale > 0:
+            raise ValueError(f"VisionConfig: motion_scale must be > 0, got {self.motion_scale!r}")
 
     def image_shape(self) -> tuple:
         """(C, H, W) of the CNN's input."""
@@ -90,14 +91,15 @@ class VisionConfig:
     @staticmethod
     def from_dict(d: dict) -> "VisionConfig":
         """The inverse of ``to_dict``. Every field must be there: a file that lacks one was written
-        by an older version whose behaviour the class defaults may not reproduce."""
-        missing = [f.name for f in dataclasses.fields(VisionConfig) if f.name not in d]
-        if missing:
-            raise ValueError(f"vision settings lack {missing}: the file predates them; train the model again")
+        by another version whose behaviour the class defaults may not reproduce."""
+        names = {f.name for f in dataclasses.fields(VisionConfig)}
+        missing, unknown = sorted(names - set(d)), sorted(set(d) - names)
+        if missing or unknown:
+            raise ValueError(f"vision settings lack {missing} and have unknown fields {unknown}: the file was "
+                             "written by another version of vgai_lite; train the model again")
         rd = dict(d["render"])
         rd["channels"] = tuple(rd["channels"])
-        return VisionConfig(view=d["view"], render=RenderConfig(**rd), motion_gap=d["motion_gap"],
-                            motion_mode=d["motion_mode"], prehistory=d["prehistory"])
+        return VisionConfig(**{**d, "render": RenderConfig(**rd)})
 
 
 def flown_backwards(r0: torch.Tensor, v0: torch.Tensor, steps, Ts: float) -> torch.Tensor:
@@ -134,7 +136,7 @@ def camera_input(vision: VisionConfig, cfg: FlockConfig, r_now: torch.Tensor,
     before = vision.frame(r_before, cfg)
     if camera is not None:
         before = camera(before, vision.motion_gap)
-    return with_motion(now, before, vision.motion_mode, MOTION_SCALE)
+    return with_motion(now, before, vision.motion_mode, vision.motion_scale)
 
 
 def stored_images(vision: VisionConfig, cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor,

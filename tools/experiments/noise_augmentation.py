@@ -1,4 +1,4 @@
-"""Experiment (issue 15): the obvious cure for VGAI's sensitivity to pixel noise, measured.
+"""Experiment: the obvious cure for VGAI's sensitivity to pixel noise, measured.
 
     python tools/experiments/noise_augmentation.py            # the record says how long it took
 

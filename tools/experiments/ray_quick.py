@@ -1,4 +1,4 @@
-"""Benchmark (issue 17): the quick reproduction, serial against Ray, on this machine.
+"""Benchmark: the quick reproduction, serial against Ray, on this machine.
 
     python tools/experiments/ray_quick.py        # about 5 minutes alone on two cores; needs requirements-cluster.txt
 

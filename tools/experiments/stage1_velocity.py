@@ -1,4 +1,4 @@
-"""Experiment (issue 13): does VGAI's visual state estimator see the velocity disagreements that
+"""Experiment: does VGAI's visual state estimator see the velocity disagreements that
 VGAI's own late flight still has, and does training it on synthetic relative velocities help?
 
     python tools/experiments/stage1_velocity.py --out data/experiments/stage1_velocity.json
@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, load_controller, rollout, sample_initial_state  # noqa: E402
-from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
+from vgai_lite.book import DATA_DIR, WORKING_SEED  # noqa: E402
 from vgai_lite.state_estimation import estimator_quality, train_state_estimator  # noqa: E402
 from vgai_lite.vision import VisionConfig  # noqa: E402
 
@@ -33,7 +33,7 @@ TIMES = (20, 60, 120, 190)
 
 
 def relative_speeds(cfg: FlockConfig, pilot, episodes: int) -> dict:
-    r0, v0 = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(EVAL_SEED))
+    r0, v0 = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(WORKING_SEED))
     v = rollout(pilot, cfg, r0, v0, steps=max(TIMES) + 1).v
     return {t: float((v[t] - v[t].mean(1, keepdim=True)).norm(dim=-1).median()) for t in TIMES}
 

@@ -1,4 +1,4 @@
-"""Experiment (issue 13): the book's default VGAI trained with half of stage 1's states shown with
+"""Experiment: the book's default VGAI trained with half of stage 1's states shown with
 synthetic velocities, everything else as ``runs.VGAI_RUNS["vgai_F24"]``; relative cost on 50
 held-out episodes and the flocking figures (velocity variance at 0.5-5 s, connectivity) on 10.
 
@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from vgai_lite import FlockConfig, consensus, relative_cost, train_vgai  # noqa: E402
-from vgai_lite.book import DATA_DIR, EVAL_SEED  # noqa: E402
+from vgai_lite.book import DATA_DIR, WORKING_SEED  # noqa: E402
 from vgai_lite.lab.runs import VGAI_RUNS  # noqa: E402
 
 
@@ -36,8 +36,8 @@ def main(argv=None) -> int:
     tcfg = dataclasses.replace(VGAI_RUNS["vgai_F24"], synthetic_share=args.share)
     ckpt = DATA_DIR / "experiments" / f"vgai_F24_synthetic{args.share:g}.pt"
     controller, hist = train_vgai(cfg, tcfg, checkpoint=ckpt, progress=False)
-    res = relative_cost(controller, cfg, episodes=50, seed=EVAL_SEED, name="VGAI, synthetic stage 1")
-    flock = consensus(controller, cfg, episodes=10)
+    res = relative_cost(controller, cfg, episodes=50, seed=WORKING_SEED, name="VGAI, synthetic stage 1")
+    flock = consensus(controller, cfg, episodes=10, seed=WORKING_SEED)
     print(res), print(flock)
     out = {"command": " ".join(["python tools/experiments/vgai_synthetic.py"] + sys.argv[1:]),
            "train_config": tcfg.to_dict(), "train_seconds": round(hist["seconds"], 1),

@@ -1,4 +1,4 @@
-"""Experiment (issue 13): one VGAI training recipe, trained and judged as a user would.
+"""Experiment: one VGAI training recipe, trained and judged as a user would.
 
     python tools/experiments/vgai_variant.py --name odd8_synth0.5 --motion-features 8 --synthetic-share 0.5
 
@@ -14,6 +14,11 @@ model), so a record and its controller can be checked against each other.
 writes the same record for a checkpoint trained before (its training time read from the checkpoint).
 ``--note`` is stored in the record (e.g. that two trainings shared the two cores, so their
 training time is not the time of one alone).
+
+The hypotheses of notebook 06 that did not make VGAI flock (longer stored flights, stage 3's own
+early share, the MLP fitted on exact features through the aux head, an anchor loss) are no longer
+knobs of the method; their records (``data/experiments/vgai_late500.json``, ``vgai_exact_mlp.json``,
+``vgai_learner_late.json``) carry a ``rerun`` command that checks out the commit that trained them.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from vgai_lite import FlockConfig, VGAITrainConfig, load_controller, relative_co
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
+from vgai_lite.lab.stage1_cache import cached  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -45,12 +51,7 @@ def main(argv=None) -> int:
     p.add_argument("--early-share", type=float, default=None)
     p.add_argument("--dagger-rounds", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
-    p.add_argument("--flight-steps", type=int, default=None, help="steps of every stored flight (hypothesis 1)")
-    p.add_argument("--mlp-on-exact", action="store_true", default=None,
-                   help="stage 2 on the CNN's features read as the exact ones (hypothesis 2)")
-    p.add_argument("--joint-early-share", type=float, default=None, help="stage 3's windows' early share (hypothesis 1)")
     p.add_argument("--learner-swarms", type=float, default=None, help="share of DAgger swarms the learner flies alone")
-    p.add_argument("--anchor-weight", type=float, default=None, help="stage 3 anchor loss (hypothesis 2)")
     p.add_argument("--channels", default=None,
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
@@ -65,8 +66,6 @@ def main(argv=None) -> int:
     changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
-                                 ("flight_steps", args.flight_steps), ("mlp_on_exact", args.mlp_on_exact),
-                                 ("anchor_weight", args.anchor_weight), ("joint_early_share", args.joint_early_share),
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
     if args.channels is not None:  # a change inside the vision configuration: recorded by name
@@ -83,7 +82,7 @@ def main(argv=None) -> int:
             hist, tcfg = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
         else:
             controller, hist = train_vgai(cfg, tcfg, checkpoint=ckpt, progress=False,
-                                          stage1_cache=args.stage1_cache or None)
+                                          **({"stage1": cached(args.stage1_cache)} if args.stage1_cache else {}))
     with Provenance(command) as eval_prov:
         res = relative_cost(controller, cfg, episodes=args.episodes, seed=VALIDATION_SEED, name=args.name)
     print(res)
@@ -91,7 +90,7 @@ def main(argv=None) -> int:
            "train_config": tcfg.to_dict(),
            "train_seconds": round(hist["seconds"], 1), "stage1_cached": hist.get("stage1_cached"),
            "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
-           "evaluation_seconds": round(eval_prov.seconds, 1), "validation": hist["rounds"], **res.summary(),
+           "evaluation_seconds": round(eval_prov.seconds, 1), "round_checks": hist["rounds"], **res.summary(),
            "pinned": res.pinned(),
            "provenance": {"training": None if args.evaluate else train_prov.record(),
                           "evaluation": eval_prov.record(checkpoint=ckpt, seed=VALIDATION_SEED,

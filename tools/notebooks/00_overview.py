@@ -58,8 +58,7 @@ plt.show()
 # | **relative cost** | a controller's flocking cost (eq. 1) over the expert's on the same initial conditions (expert = 1.00) | 01, `evaluate.relative_cost` |
 # | **flocked** | the book's one definition: a small velocity variance late in the flight (at 5 s) and the swarm still connected | 01, `evaluate.flocked` |
 # | **validation / test episodes** | initial conditions drawn from two seeds: every choice (recipe, hyperparameter, training seed) is made on the validation episodes; the reported numbers come from the test episodes, which no choice has seen | 01, `book.VALIDATION_SEED`, `book.TEST_SEED` |
-# | **selection episodes** | the validation episodes under the name the seed choice uses | `book.SELECTION_SEED` |
-# | **working episodes** | a third seed's initial conditions, held out from training, on which the chapters draw their pictures and compare designs while they teach: not a test | 01, `book.EVAL_SEED` |
+# | **working episodes** | a third seed's initial conditions, held out from training, on which the chapters draw their pictures and compare designs while they teach: not a test | 01, `book.WORKING_SEED` |
 # | **repair sampling** | drawing initial positions for large teams by moving the agents that break a constraint instead of redrawing the whole swarm | 01, `FlockConfig.init_method` |
 # | **DAgger round** | fly swarms with the expert and the learner mixed, label every visited state with the expert's action, add them to the data, refit | 03, `imitation.dagger_mix` |
 # | **the learner flying alone** | a share of each DAgger round's swarms flown by the learner at every step, so its own drift is in the data | 06, `VGAITrainConfig.learner_swarms` |
@@ -119,7 +118,7 @@ paper_vs_book.show()
 import torch
 
 import vgai_lite
-from vgai_lite.book import EVAL_SEED, QUICK, pick
+from vgai_lite.book import WORKING_SEED, QUICK, pick
 
 print(f"vgai_lite {vgai_lite.__version__}, torch {torch.__version__}")
 print("quick mode" if QUICK else "full mode", "-> episodes per evaluation:", pick(full=50, quick=8))
@@ -135,7 +134,7 @@ from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_sta
 from vgai_lite.viz import draw_swarm
 
 cfg = FlockConfig()
-r0, v0 = sample_initial_state(cfg, 1, torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, 1, torch.Generator().manual_seed(WORKING_SEED))
 traj = rollout(ExpertController(cfg), cfg, r0, v0)
 
 fig, axes = plt.subplots(1, 2, figsize=(10, 4.8))

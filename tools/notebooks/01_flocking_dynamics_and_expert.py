@@ -35,7 +35,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_cost, potential,
                        potential_gradient, relative_cost, rollout, sample_initial_state, step)
-from vgai_lite.book import EVAL_SEED, QUICK, VALIDATION_SEED, pick, prose, threads
+from vgai_lite.book import WORKING_SEED, QUICK, VALIDATION_SEED, pick, prose, threads
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.evaluate import CLOSE_CALLS, FLOCK_TIMES, FLOCKED_CONNECTED, FLOCKED_VARIANCE
 from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
@@ -140,7 +140,7 @@ prose("With the $N^{{1/4}}$ disc the neighbour test almost always passes and the
 
 # %%
 t0 = time.perf_counter()
-r0, v0 = sample_initial_state(cfg, pick(50, 8), torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, pick(50, 8), torch.Generator().manual_seed(WORKING_SEED))
 dt = time.perf_counter() - t0
 print(f"{len(r0)} initial conditions in {dt:.2f} s ({1000 * dt / len(r0):.0f} ms each)")
 
@@ -264,7 +264,7 @@ print(inspect.getsource(controllers.local_control).split('"""')[-1])
 # | training | a run's own seed (its per-round checks at a fixed offset from it) | what a controller learns from |
 # | **validation** | `VALIDATION_SEED` | every choice: a design, a recipe, a hyperparameter ($\rho$ below), which of several training seeds to ship |
 # | **test** | `TEST_SEED` | only the numbers the book reports for the controllers it ships; nothing is chosen on them |
-# | working | `EVAL_SEED` | the chapters' pictures and worked experiments (this chapter's tables, notebook 03's comparisons, the shipped DAGNNs' own records) |
+# | working | `WORKING_SEED` | the chapters' pictures and worked experiments (this chapter's tables, notebook 03's comparisons, the shipped DAGNNs' own records) |
 #
 # Why: a choice made on the episodes that are then reported flatters the choice (with enough
 # variants, one looks good on those episodes by luck). The **working episodes** are held out from
@@ -332,7 +332,7 @@ animation_image(anim)
 # %%
 episodes = pick(50, 8)
 t0 = time.perf_counter()
-res_local = relative_cost(local, cfg, episodes=episodes, seed=EVAL_SEED)
+res_local = relative_cost(local, cfg, episodes=episodes, seed=WORKING_SEED)
 print(f"({time.perf_counter() - t0:.1f} s)")
 print(res_local)
 

@@ -29,13 +29,13 @@ from matplotlib.collections import LineCollection
 
 from vgai_lite import ExpertController, FlockConfig, rollout, sample_initial_state
 from vgai_lite.aggregation import AggregationBuffer, aggregation_sequence
-from vgai_lite.book import EVAL_SEED, QUICK, pick, threads
+from vgai_lite.book import WORKING_SEED, QUICK, pick, threads
 from vgai_lite.graphs import GSO_KINDS, adjacency, gso, k_hop_reach
 from vgai_lite.viz import draw_swarm
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
-r0, v0 = sample_initial_state(cfg, pick(20, 4), torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, pick(20, 4), torch.Generator().manual_seed(WORKING_SEED))
 print("quick mode" if QUICK else "full mode", f"| {len(r0)} swarms of N = {cfg.N}")
 
 # %% [markdown]

@@ -31,7 +31,7 @@ from IPython.display import Markdown, display
 
 from vgai_lite import (ExpertController, FlockConfig, LocalController, relative_cost, rollout,
                        sample_initial_state)
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose, threads
+from vgai_lite.book import DATA_DIR, WORKING_SEED, QUICK, pick, prose, threads
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.dagnn_training import DAGNNTrainConfig, train_dagnn
 from vgai_lite.imitation import load_or_train
@@ -43,7 +43,7 @@ from vgai_lite.lab.runs import DAGNN_RUNS
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
 EPISODES = pick(50, 4)
-print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} working episodes (seed {EVAL_SEED}, notebook 01)")
+print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} working episodes (seed {WORKING_SEED}, notebook 01)")
 
 # %% [markdown]
 # ## 1. Six exact local features
@@ -60,7 +60,7 @@ print("quick mode" if QUICK else "full mode", f"| evaluations on {EPISODES} work
 # agents: that is what the exchanges of $\mathbf Z(t)$ are for.
 
 # %%
-r0, v0 = sample_initial_state(cfg, EPISODES, torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, EPISODES, torch.Generator().manual_seed(WORKING_SEED))
 X = local_features(r0, v0, cfg.R)
 print("X shape (B, N, F):", tuple(X.shape))
 for name, col in zip(FEATURE_NAMES, X.reshape(-1, 6).T):
@@ -159,9 +159,9 @@ print(DAGNNTrainConfig())
 # %%
 if QUICK:
     tiny = DAGNNTrainConfig(K=2, hidden=(16,), rounds=2, episodes_per_round=2, epochs_per_round=1)
-    _, tiny_hist = train_dagnn(cfg.replace(N=20, T=30), tiny, validation_episodes=2, progress=False)
-    print("miniature run, validation relative cost by round:",
-          [round(r["val_relative_cost"], 2) for r in tiny_hist["rounds"]])
+    _, tiny_hist = train_dagnn(cfg.replace(N=20, T=30), tiny, check_episodes=2, progress=False)
+    print("miniature run, round-check relative cost by round:",
+          [round(r["check_relative_cost"], 2) for r in tiny_hist["rounds"]])
 
 dagnn, _ = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4.pt", cfg, DAGNN_RUNS["dagnn_K4"], train_dagnn)
 hist = dagnn.meta["history"]
@@ -177,33 +177,33 @@ for k in range(1, len(hist["rounds"])):
 axes[0].set_xlabel("epoch (grey lines: a DAgger round adds data)"), axes[0].set_ylabel("L1 loss [m/s²]")
 axes[0].set_title("training loss on the aggregated dataset")
 rounds = [r["round"] for r in hist["rounds"]]
-axes[1].plot(rounds, [r["val_relative_cost"] for r in hist["rounds"]], "o-")
+axes[1].plot(rounds, [r["check_relative_cost"] for r in hist["rounds"]], "o-")
 axes[1].axhline(1.0, color="0.5", ls="--")
 axes[1].set_xlabel("DAgger round"), axes[1].set_ylabel("relative cost")
-axes[1].set_title("per-round validation episodes (seed 1000, not the working ones)")
+axes[1].set_title("round checks (episodes of the training seed + 1000, not the working ones)")
 plt.tight_layout()
 plt.show()
 
 # %% [markdown]
 # The loss jumps when round 1 first adds the learner's own states, which are harder than the expert's,
-# while the validation cost falls round after round:
+# while the round-check cost falls round after round:
 
 # %%
-print("validation relative cost by round:", [round(r["val_relative_cost"], 2) for r in hist["rounds"]])
+print("round-check relative cost by round:", [round(r["check_relative_cost"], 2) for r in hist["rounds"]])
 
 # %% [markdown]
 # ## 6. Evaluation: Centralized, DAGNN, Local
 #
-# All controllers on the same initial conditions, the working episodes (seed `EVAL_SEED`, never used in
+# All controllers on the same initial conditions, the working episodes (seed `WORKING_SEED`, never used in
 # training; notebook 01):
 
 # %%
 t0 = time.perf_counter()
 signed_log, _ = load_or_train(DATA_DIR / "dagnn" / "dagnn_K4_signed_log.pt", cfg,
                               DAGNN_RUNS["dagnn_K4_signed_log"], train_dagnn, progress=False)
-results = {"DAGNN": relative_cost(dagnn, cfg, episodes=EPISODES, seed=EVAL_SEED),
-           "DAGNN, signed-log features": relative_cost(signed_log, cfg, episodes=EPISODES, seed=EVAL_SEED),
-           "Local": relative_cost(LocalController(cfg), cfg, episodes=EPISODES, seed=EVAL_SEED)}
+results = {"DAGNN": relative_cost(dagnn, cfg, episodes=EPISODES, seed=WORKING_SEED),
+           "DAGNN, signed-log features": relative_cost(signed_log, cfg, episodes=EPISODES, seed=WORKING_SEED),
+           "Local": relative_cost(LocalController(cfg), cfg, episodes=EPISODES, seed=WORKING_SEED)}
 print(f"({time.perf_counter() - t0:.1f} s)")
 paper = {"Centralized": "1.00", "DAGNN": f"{PAPER['R']['DAGNN'][1.5]:.2f}", "Local": f"{PAPER['R']['Local'][1.5]:.2f}",
          "DAGNN, signed-log features": "—"}  # the paper's numbers at the defaults (R = 1.5 m)
@@ -255,7 +255,7 @@ def shipped_dagnn(name):
 
 rows, dagger_cells = [], []
 for name, label in (("dagnn_K4", "DAgger, p = 0.33"), ("dagnn_K4_no_dagger", "expert data only")):
-    res = relative_cost(shipped_dagnn(name), cfg, episodes=EPISODES, seed=EVAL_SEED)
+    res = relative_cost(shipped_dagnn(name), cfg, episodes=EPISODES, seed=WORKING_SEED)
     lo, hi = res.mean_ratio_ci
     dagger_cells.append(res.summary())
     rows.append(f"| {label} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {res.safety.share_below(0.05):.0%} |")
@@ -281,7 +281,7 @@ prose("By the book's one criterion (notebook 07, `vgai_lite/lab/findings.py`: a 
 rows, ks, costs, k_cells = [], [], [], []
 paper_k = PAPER["K"]["DAGNN"]  # the paper's Table 1b row, by exchanges
 for K in (1, 2, 3, 4):
-    res = relative_cost(shipped_dagnn(f"dagnn_K{K}"), cfg, episodes=EPISODES, seed=EVAL_SEED)
+    res = relative_cost(shipped_dagnn(f"dagnn_K{K}"), cfg, episodes=EPISODES, seed=WORKING_SEED)
     lo, hi = res.mean_ratio_ci
     ks.append(K - 1), costs.append(res.mean_ratio), k_cells.append(res.summary())
     rows.append(f"| {K - 1} | {res.mean_ratio:.2f} ({lo:.2f}-{hi:.2f}) | {format(paper_k[K - 1], '.2f') if K - 1 in paper_k else '—'} | "
@@ -316,7 +316,7 @@ for name, label in (("dagnn_K4_sum", "adjacency (sum)"), ("dagnn_K4_mean", "row_
     for N in (50, 75, 100):
         c_N = cfg.replace(N=N, init_method="repair")
         ctrl.cfg = c_N
-        res = relative_cost(ctrl, c_N, episodes=pick(30, 2), seed=EVAL_SEED)
+        res = relative_cost(ctrl, c_N, episodes=pick(30, 2), seed=WORKING_SEED)
         cells.append(f"{res.mean_ratio:.2f}")
     ctrl.cfg = cfg
     rows.append(f"| {label} | " + " | ".join(cells) + " |")
@@ -340,7 +340,7 @@ rows = []
 for gain in (1, 3, 10, 30):
     for rep in (1, 0):
         res = relative_cost(LocalController(cfg, alignment_gain=gain, repulsion_gain=rep), cfg,
-                            episodes=EPISODES, seed=EVAL_SEED)
+                            episodes=EPISODES, seed=WORKING_SEED)
         rows.append(f"| {gain} | {'on' if rep else '**off**'} | {res.mean_ratio:.2f} | {res.safety.median_min_distance:.3f} | "
                     f"{res.safety.share_below(0.05):.0%} | {res.safety.share_below(0.1):.0%} |")
 display(Markdown(f"| alignment gain | repulsion | relative cost | median closest approach [m] (expert {exp.median_min_distance:.3f}) | episodes < 0.05 m | < 0.1 m |\n"

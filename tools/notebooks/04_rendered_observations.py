@@ -31,7 +31,7 @@ import torch
 from IPython.display import HTML, Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, rollout, sample_initial_state
-from vgai_lite.book import EVAL_SEED, QUICK, pick, prose, threads
+from vgai_lite.book import WORKING_SEED, QUICK, pick, prose, threads
 from vgai_lite.physics import raycast_depth, rollout_pymunk
 from vgai_lite.render import (CAMERAS, RenderConfig, bearing_to_column, column_layers, egocentric_depth,
                               render_egocentric, render_topdown, with_motion)
@@ -41,7 +41,7 @@ from vgai_lite.viz import animate_views, animation_image, draw_swarm
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
 cfg = FlockConfig()
 rcfg = VisionConfig().render  # exactly what VGAI's CNN sees (RenderConfig(), 12 x 32 per camera)
-r0, v0 = sample_initial_state(cfg, pick(20, 3), torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, pick(20, 3), torch.Generator().manual_seed(WORKING_SEED))
 print("quick mode" if QUICK else "full mode")
 print(rcfg)
 

@@ -27,7 +27,7 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, load_controller, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose, threads
+from vgai_lite.book import DATA_DIR, WORKING_SEED, QUICK, pick, prose, threads
 from vgai_lite.features import FEATURE_NAMES, local_features
 from vgai_lite.models import VisualCNN
 from vgai_lite.render import CAMERAS
@@ -58,7 +58,7 @@ paper_vs_book.show(["observation", "motion", "CNN", "training"])
 # Why two frames is the subject of section 3.
 
 # %%
-r0, v0 = sample_initial_state(cfg, pick(8, 2), torch.Generator().manual_seed(EVAL_SEED))
+r0, v0 = sample_initial_state(cfg, pick(8, 2), torch.Generator().manual_seed(WORKING_SEED))
 traj = rollout(ExpertController(cfg), cfg, r0, v0)
 t = 10
 img = stored_images(vision, cfg, traj.r, traj.v, torch.arange(len(r0)), torch.full((len(r0),), t))  # (B, N, 4, 12, 128)
@@ -170,7 +170,7 @@ prose("Stage 1 inside that VGAI training took {inside:.0f} s; the shipped two-fr
 # %%
 rows = []
 for name, (est, vis, _) in estimators.items():
-    quality = estimator_quality(est, vis, cfg, episodes=pick(8, 2))
+    quality = estimator_quality(est, vis, cfg, episodes=pick(8, 2), seed=WORKING_SEED)
     for t, q in quality.items():
         rows.append(f"| {name} | {t} | " + " | ".join(f"{x:.2f}" for x in q) + " |")
 display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|---|---|" + "---|" * 6 + "\n" + "\n".join(rows)))
@@ -313,7 +313,7 @@ assert check_circular_conv(MyCircularConv)
 # %%
 from vgai_lite.imitation import EpisodeStore
 from vgai_lite.models import ResidualBlock
-from vgai_lite.state_estimation import fit_state_estimator
+from vgai_lite.vgai_training import fit_state_estimator
 from vgai_lite.vgai_config import VGAITrainConfig
 from vgai_lite.lab.exercises import RESULTS
 
@@ -321,7 +321,7 @@ if not RESULTS.get("05.2"):
     print("The experiment runs once MyCircularConv above passes its check (exercise 05.2).")
 else:
     steps = pick(400, 3)
-    tc = VGAITrainConfig(F=24, motion_features=0)
+    tc = VGAITrainConfig(F=24, motion_features=0, vision=vision, warm_steps=steps, warm_states=8)
     gen = torch.Generator().manual_seed(0)
     store = EpisodeStore()
     store.fly(None, cfg, *sample_initial_state(cfg, pick(20, 1), gen), 0.0, gen)
@@ -341,7 +341,7 @@ else:
         torch.manual_seed(0)
         cnn = make(tc.new_model().cnn)
         t0 = time.perf_counter()
-        fit_state_estimator(cnn, vision, cfg, r_tr, v_tr, steps, 8, tc, torch.Generator().manual_seed(1), progress=False)
+        fit_state_estimator(cnn, cfg, tc, r_tr, v_tr, torch.Generator().manual_seed(1), progress=False)
         with torch.no_grad():
             est = cnn.estimate_local_features(imgs.flatten(0, 1))
             turned = cnn.estimate_local_features(torch.roll(imgs.flatten(0, 1), half, dims=-1))

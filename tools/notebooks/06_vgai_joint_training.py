@@ -109,8 +109,8 @@ if QUICK:
                            vision=VisionConfig(render=RenderConfig(view_height=8, view_width=16)),
                            expert_episodes=1, dagger_rounds=1, episodes_per_round=2, warm_steps=2,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=1)
-    _, tiny_hist = train_vgai(cfg.replace(N=10, T=20), tiny, progress=False, validation_episodes=1)
-    print("miniature run:", [round(r["val_relative_cost"], 1) for r in tiny_hist["rounds"]])
+    _, tiny_hist = train_vgai(cfg.replace(N=10, T=20), tiny, progress=False, check_episodes=1)
+    print("miniature run:", [round(r["check_relative_cost"], 1) for r in tiny_hist["rounds"]])
 
 vgai = load_controller(DATA_DIR / "vgai" / "vgai_F24.pt")
 hist = vgai.meta["history"]
@@ -132,9 +132,9 @@ axes[1].set_title("stage 3: joint K-step BPTT (dotted: a new DAgger round)", fon
 axes[1].set_xlabel("step (moving average of 50)")
 axes[1].set_ylabel("L1 on actions [m/s²]\n+ aux_weight × stage-1 loss")
 stages = [r["stage"] for r in hist["rounds"]]
-axes[2].plot(range(len(stages)), [r["val_relative_cost"] for r in hist["rounds"]], "o-")
+axes[2].plot(range(len(stages)), [r["check_relative_cost"] for r in hist["rounds"]], "o-")
 axes[2].set_xticks(range(len(stages)), [s.replace("DAgger round", "round") for s in stages], rotation=20)
-axes[2].set_title("per-round validation relative cost"), axes[2].axhline(1, color="0.5", ls="--")
+axes[2].set_title("round-check relative cost"), axes[2].axhline(1, color="0.5", ls="--")
 plt.tight_layout()
 plt.show()
 
@@ -411,8 +411,7 @@ prose("Along expert flights at step {step}, where the swarm is aligned and the t
 limit = json.loads((DATA_DIR / "experiments" / "consensus_limit.json").read_text())
 rows = []
 for name, r in limit["controllers"].items():
-    label = name.replace("VGAI vgai_F24_seed", "VGAI without the learner alone, training seed ").replace(
-        "last round's plain CNN", "the paper's recipe (plain CNN)")
+    label = name.replace("VGAI vgai_F24_seed", "VGAI without the learner alone, training seed ")
     rows.append(f"| {label} | " + " | ".join(
         f"{r[t]['velocity_variance_median']:.1e} | {r[t]['damping_gain_median']:.1f} | "
         f"{r[t]['forcing_at_rest_rms_median']:.3f} | {r[t]['balance_variance_median']:.1e}" for t in ("2s", "5s")) + " |")

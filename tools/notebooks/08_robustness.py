@@ -27,14 +27,13 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, EVAL_SEED, QUICK, pick, prose
+from vgai_lite.book import DATA_DIR, WORKING_SEED, QUICK, pick, prose
 from vgai_lite.config import DISTANCE_FLOOR
 from vgai_lite.controllers import expert_control
 from vgai_lite.flocking import NonFiniteStateError
 from vgai_lite.lab.perturbations import Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, World, perturbed
 from vgai_lite.lab import robustness
 from vgai_lite.lab.runs import training_minutes
-from vgai_lite.vision import MOTION_SCALE
 from vgai_lite.viz import PALETTE, controller_color
 
 cfg = FlockConfig()
@@ -59,7 +58,7 @@ vgai = load_controller(DATA_DIR / "vgai" / "vgai_F24.pt")
 #   each other along, so they get no push from each other (their other neighbours still act).
 
 # %%
-r, v = sample_initial_state(cfg, 1, torch.Generator().manual_seed(EVAL_SEED))
+r, v = sample_initial_state(cfg, 1, torch.Generator().manual_seed(WORKING_SEED))
 r_bad = r.clone()
 r_bad[0, 7, 1] = float("nan")
 try:
@@ -130,18 +129,18 @@ for row, (label, ps) in enumerate(worlds.items()):
     for ax in axes[row]:
         ax.set_xticks([]), ax.set_yticks([])
 axes[0, 0].set_title("gray channel I(t): front, right, back, left cameras")
-axes[0, 1].set_title(f"motion channel {MOTION_SCALE:g} (I(t) - I(t-5))")
+axes[0, 1].set_title(f"motion channel {vgai.vision.motion_scale:g} (I(t) - I(t-{vgai.vision.motion_gap}))")
 plt.tight_layout()
 plt.show()
 
 # %%
-noise_motion = MOTION_SCALE * 2 ** 0.5 * 0.05
+noise_motion = vgai.vision.motion_scale * 2 ** 0.5 * 0.05
 prose("On drone 0's panorama the motion channel averages {clean:.3f} in size when the frames are clean: "
       "drones move a fraction of a column in five steps. Pixel noise of standard deviation 0.05 on each "
       "frame becomes noise of about {amp:.2f} on that channel (the difference of two noisy frames, times "
       "{scale:g}), and the channel's average size becomes {noisy:.3f}: the motion signal VGAI reads its "
       "neighbours' velocities from drowns, while the gray channel still looks clean to the eye.",
-      clean=motion_size["clean"], amp=noise_motion, scale=MOTION_SCALE, noisy=motion_size["ImageNoise(0.05)"])
+      clean=motion_size["clean"], amp=noise_motion, scale=vgai.vision.motion_scale, noisy=motion_size["ImageNoise(0.05)"])
 
 # %% [markdown]
 # ## 3. The sweep
@@ -181,7 +180,7 @@ prose("The clean VGAI cell is the book's VGAI on {n} episodes of seed {seed}: {c
       lo=sweep_clean["relative_cost_mean_ci95"][0], hi=sweep_clean["relative_cost_mean_ci95"][1],
       h=head["relative_cost_mean"], hlo=head["relative_cost_mean_ci95"][0], hhi=head["relative_cost_mean_ci95"][1],
       hn=head["episodes"], hs=head["seed"])
-if flown != robustness._file_hash(robustness.CONTROLLERS["VGAI"]):
+if flown != robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"]):
     display(Markdown("**Careful: this sweep flew the book's earlier VGAI** (the recipe without the learner flying "
                      "alone, notebook 06's ablation, row 4), not the shipped `vgai_F24.pt`; its VGAI cells are "
                      "recomputed by the command above."))

@@ -151,7 +151,7 @@ unsafe = [c for c in n_cols if not as_safe_as_expert(n_vgai[c])]
 from vgai_lite.lab import robustness
 
 rob = robustness.load()
-rob_current = robustness.find(rob, "VGAI").get("checkpoint") == robustness._file_hash(robustness.CONTROLLERS["VGAI"])
+rob_current = robustness.find(rob, "VGAI").get("checkpoint") == robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"])
 noisy = robustness.find(rob, "VGAI", (("image_noise", robustness.TARGETS["image_noise_sigma"]),))
 items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "

@@ -8,6 +8,7 @@ is the baseline the batched torch simulator is compared against on the same mach
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -17,13 +18,12 @@ from ..config import FlockConfig
 from ..controllers import expert_control
 from ..evaluate import relative_cost
 from ..flocking import sample_initial_state, step
-from ..imitation import EpisodeStore
+from ..imitation import ROUND_CHECK_SEED_OFFSET, EpisodeStore
 from ..learned_controllers import VGAIController
 from ..physics import raycast_depth
 from ..render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
-from ..state_estimation import fit_state_estimator
 from ..vgai_config import BOOK
-from ..vgai_training import bptt_loss
+from ..vgai_training import fit_state_estimator, joint_loss, sample_windows, window_batch
 
 
 def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
@@ -109,7 +109,7 @@ def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=N
 def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     """Seconds per gradient step of VGAI's stage 1 (visual state estimation) and stage 3 (joint
     K-step BPTT), and per evaluation episode, at the book's VGAI (``BOOK``); projects the time of
-    a full default training from them (flight collection and validation included)."""
+    a full default training from them (flight collection and round checks included)."""
     cfg, tcfg = FlockConfig(), BOOK
     gen = torch.Generator().manual_seed(0)
     r0, v0 = sample_initial_state(cfg, episodes, gen)
@@ -120,13 +120,13 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     collect_expert = (time.perf_counter() - start) / episodes
     model = tcfg.new_model()
     start = time.perf_counter()
-    fit_state_estimator(model.cnn, tcfg.vision, cfg, r, v, steps, tcfg.warm_states, tcfg, gen, progress=False)
+    fit_state_estimator(model.cnn, cfg, dataclasses.replace(tcfg, warm_steps=steps), r, v, gen, progress=False)
     stage1 = (time.perf_counter() - start) / steps
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
     model.train()
     start = time.perf_counter()
     for _ in range(steps):
-        loss = bptt_loss(model, cfg, tcfg, r, v, u, gen)
+        loss = joint_loss(model, tcfg, window_batch(cfg, tcfg, r, v, u, *sample_windows(r.shape[0], r.shape[1], tcfg, gen)))
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
@@ -134,11 +134,11 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     model.eval()
     learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
     start = time.perf_counter()
-    relative_cost(learner, cfg, episodes=episodes, seed=0, flock_times=())  # as validation flies
+    relative_cost(learner, cfg, episodes=episodes, seed=tcfg.seed + ROUND_CHECK_SEED_OFFSET, flock_times=())  # as a round check flies
     episode = (time.perf_counter() - start) / episodes  # the learner and the expert flying one episode
     flights = tcfg.expert_episodes * collect_expert + tcfg.dagger_rounds * tcfg.episodes_per_round * episode
-    validation = (tcfg.dagger_rounds + 1) * 10 * episode
-    projected = tcfg.warm_steps * stage1 + tcfg.dagger_rounds * tcfg.joint_steps * stage3 + flights + validation
+    checks = (tcfg.dagger_rounds + 1) * 10 * episode
+    projected = tcfg.warm_steps * stage1 + tcfg.dagger_rounds * tcfg.joint_steps * stage3 + flights + checks
     return {"stage1_step_s": stage1, "joint_step_s": stage3, "eval_episode_s": episode,
             "expert_episode_s": collect_expert, "projected_training_s": projected}
 

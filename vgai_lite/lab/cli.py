@@ -23,7 +23,7 @@ import os
 import sys
 from pathlib import Path
 
-from ..book import EVAL_SEED, ROOT
+from ..book import WORKING_SEED, ROOT
 
 
 def _cfg_from(args):
@@ -80,18 +80,21 @@ def cmd_evaluate(args, extra):
         controller = LocalController(cfg)
     elif args.controller == "expert":
         controller = ExpertController(cfg)
-    elif args.controller.endswith(".pt"):
-        from ..checkpoints import load_controller
+    else:  # a checkpoint file (.pt) or the name of a shipped controller (vgai_F24, dagnn_K4, ...)
+        from ..checkpoints import load_controller, resolve
 
-        controller = load_controller(args.controller)
+        try:
+            path = resolve(args.controller)
+        except (ValueError, FileNotFoundError) as exc:
+            raise SystemExit(f"--controller must be 'local', 'expert', a checkpoint file (.pt) or a shipped "
+                             f"controller's name: {exc}") from exc
+        controller = load_controller(path)
         # fly it in the stored configuration, with the changes asked for on the command line
         changes = {k: getattr(args, k) for k in ("N", "R", "v_init", "T", "rho") if getattr(args, k) is not None}
         if args.N is not None and args.N != controller.trained_config.N:
             changes.setdefault("init_method", "repair")
         cfg = controller.trained_config.replace(**changes)
         controller.cfg = cfg
-    else:
-        raise SystemExit(f"--controller must be 'local', 'expert' or a checkpoint file (.pt), got {args.controller!r}")
     from .provenance import Provenance
 
     with Provenance(" ".join(["python -m vgai_lite"] + sys.argv[1:])) as prov:
@@ -103,7 +106,7 @@ def cmd_evaluate(args, extra):
     if args.json:
         out = {"config": cfg.to_dict(), **res.summary(), "pinned": res.pinned(),
                **({"consensus": flock.summary()} if args.consensus else {}),
-               "provenance": prov.record(checkpoint=args.controller if args.controller.endswith(".pt") else None,
+               "provenance": prov.record(checkpoint=path if args.controller not in ("local", "expert") else None,
                                          seed=args.seed, episodes=args.episodes)}
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
@@ -195,7 +198,7 @@ def cmd_train_vgai(args, extra):
     if args.choose:
         record = choose_seed()
         for name, c in record["candidates"].items():
-            print(f"{name}: selection relative cost {c['relative_cost_mean']:.2f} on {c['episodes']} episodes")
+            print(f"{name}: validation relative cost {c['relative_cost_mean']:.2f} on {c['episodes']} episodes")
         print(f"chosen: {record['chosen']} -> data/vgai/vgai_F24.pt (set runs.VGAI_F24_SEED = {record['chosen_seed']})")
     if not names and not args.estimators and not args.choose:
         raise SystemExit(f"name a run ({sorted(VGAI_RUNS)}), or --seeds, --choose or --estimators")
@@ -241,9 +244,9 @@ def cmd_reproduce(args, extra):
     from .reproduce import TABLES, ReproduceConfig, format_table, run
 
     torch.set_num_threads(args.threads)
-    rc = ReproduceConfig(quick=args.quick, seeds=args.seeds, vgai_seeds=args.vgai_seeds,
-                         episodes=args.episodes, episodes_large=args.episodes_large, retrain=args.retrain,
-                         extras=args.extras)
+    given = {k: getattr(args, k) for k in ("seeds", "vgai_seeds", "episodes", "episodes_large")
+             if getattr(args, k) is not None}  # the others keep ReproduceConfig's defaults, written there once
+    rc = ReproduceConfig(quick=args.quick, retrain=args.retrain, extras=args.extras, **given)
     for t in args.only or []:
         if t not in TABLES and t != "robustness":
             raise SystemExit(f"--only takes table names {list(TABLES)} or 'robustness', got {t!r}")
@@ -301,13 +304,13 @@ def main(argv=None):
                    help="also fly E episodes of 5 s and print the velocity variance at 0.5, 1, 2, 5 s and "
                         "whether the swarm stays connected (did it flock?)")
     p.add_argument("--episodes", type=int, default=50)
-    p.add_argument("--seed", type=int, default=EVAL_SEED, help=f"initial-condition seed (default {EVAL_SEED})")
+    p.add_argument("--seed", type=int, default=WORKING_SEED, help=f"initial-condition seed (default {WORKING_SEED})")
     p.add_argument("--device", default=None)
     p.add_argument("--json", help="also write the figures to this JSON file")
     _add_cfg_args(p)
     p = sub.add_parser("demo", help="headless: expert vs local, pictures and an HTML animation")
     p.add_argument("--episodes", type=int, default=20)
-    p.add_argument("--seed", type=int, default=EVAL_SEED)
+    p.add_argument("--seed", type=int, default=WORKING_SEED)
     p.add_argument("--out", default="out")
     _add_cfg_args(p)
     p = sub.add_parser("export", help="headless: write the notebooks as HTML pages")
@@ -327,19 +330,19 @@ def main(argv=None):
     p.add_argument("--estimators", action="store_true", help="the single- and two-frame state estimators")
     p.add_argument("--seeds", action="store_true", help="the default VGAI's three training seeds (data/vgai/seeds/)")
     p.add_argument("--choose", action="store_true",
-                   help="pick vgai_F24 among the seeds on the selection episodes (data/vgai/seeds/choice.json)")
+                   help="pick vgai_F24 among the seeds on the validation episodes (data/vgai/seeds/choice.json)")
     p.add_argument("--retrain", action="store_true")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of each record (seed VALIDATION_SEED)")
     p.add_argument("--threads", type=int, default=2)
     p = sub.add_parser("reproduce", help="the paper's tables: train what is missing, evaluate, write data/results/")
     p.add_argument("--only", nargs="+", metavar="TABLE", help="tables to run: F K v_init R N (default all), or robustness (notebook 08's sweep)")
     p.add_argument("--quick", action="store_true", help="every table in small form (tiny trainings, 2 short episodes)")
-    p.add_argument("--seeds", type=int, default=3, help="training seeds of the DAGNN rows (default 3)")
-    p.add_argument("--vgai-seeds", dest="vgai_seeds", type=int, default=1,
-                   help="training seeds of the VGAI rows (default 1; each is a quarter-hour training)")
-    p.add_argument("--episodes", type=int, default=30, help="held-out episodes per cell (N' <= 75)")
-    p.add_argument("--episodes-large", dest="episodes_large", type=int, default=10,
-                   help="held-out episodes per cell for N' >= 100")
+    p.add_argument("--seeds", type=int, default=None, help="training seeds of the DAGNN rows (default: ReproduceConfig's)")
+    p.add_argument("--vgai-seeds", dest="vgai_seeds", type=int, default=None,
+                   help="training seeds of the VGAI rows (default: ReproduceConfig's; each is a training of most of an hour)")
+    p.add_argument("--episodes", type=int, default=None, help="test episodes per cell, N' <= 75 (default: ReproduceConfig's)")
+    p.add_argument("--episodes-large", dest="episodes_large", type=int, default=None,
+                   help="test episodes per cell for N' >= 100 (default: ReproduceConfig's)")
     p.add_argument("--out", default=None, help="results folder (default data/results, or data/results_quick)")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--retrain", action="store_true",

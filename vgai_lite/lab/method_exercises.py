@@ -9,6 +9,7 @@ raise. Each check's docstring says what it asks for.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Callable
 
 import torch
@@ -19,6 +20,7 @@ from ..aggregation import aggregation_sequence
 from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
 from ..graphs import gso
 from ..imitation import dagger_mix
+from ..vgai_training import bptt_loss
 
 
 # ---------------------------------------------------------------------------------------------
@@ -308,9 +310,8 @@ def check_dagger_mix(student_fn: Callable) -> CheckResult:
 # 06.3: the K-step BPTT loss
 
 def _reference_bptt(cnn, mlp, images, S, u_star):
-    M, K, N = images.shape[:3]
-    X = cnn(images.flatten(0, 2)).view(M, K, N, -1)
-    return nnf.l1_loss(mlp(aggregation_sequence(X, S, K)[:, -1]), u_star)
+    """The library's eq. 10 through figure 3 (``vgai_training.bptt_loss``), on this check's networks."""
+    return bptt_loss(SimpleNamespace(cnn=cnn, mlp=mlp), images, S, u_star)
 
 
 def check_bptt_loss(student_fn: Callable) -> CheckResult:

@@ -14,7 +14,7 @@ from ..dagnn_training import DAGNNTrainConfig
 from ..graphs import DEFAULT_GSO
 from ..render import CAMERAS
 from ..vgai_config import BOOK
-from ..vision import MOTION_SCALE, VisionConfig
+from ..vision import VisionConfig
 
 
 def _rows() -> dict:
@@ -43,7 +43,7 @@ def _rows() -> dict:
         "motion": (
             "one frame per step (the CNN sees no motion within one input)",
             f"each frame paired with the one g = {vis.motion_gap} steps earlier as "
-            f"[I(t), {MOTION_SCALE:g} (I(t) − I(t−g))] ({C} channels); frames before t = 0 drawn from the "
+            f"[I(t), {vis.motion_scale:g} (I(t) − I(t−g))] ({C} channels); frames before t = 0 drawn from the "
             "initial state flown backwards (prehistory)",
             "the expert's action is mostly velocity alignment, which a single frame cannot show; notebook 05"),
         "CNN": (

@@ -285,7 +285,7 @@ class Perturbed:
         c, w = self.controller, self.world
         with torch.inference_mode(not c.gradients):
             S = gso(w.links(adjacency(r, c.cfg.R)), c.gso_kind)
-            X = c.features(r, v, camera=w.camera) if self.sees else c.features(w.positions(r), v)
+            X = c.features(r, c.remember(r, v), camera=w.camera) if self.sees else c.features(w.positions(r), v)
             u = c.act(self.buffer.push(X, S))
         w.t += 1
         return u

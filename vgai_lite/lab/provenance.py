@@ -31,12 +31,16 @@ from ..book import ROOT
 
 
 def sha256(path: Union[str, Path]) -> str:
-    """The sha256 of a file's bytes (a checkpoint's identity)."""
-    h = hashlib.sha256()
+    """The sha256 of a file's bytes (a checkpoint's identity; its first 12 digits key the robustness
+    sweep's cells)."""
     with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()
+
+
+def repo_relative(path: Union[str, Path]) -> str:
+    """``path`` relative to the repository (as records name files), or as given when outside it."""
+    p = Path(path).resolve()
+    return str(p.relative_to(ROOT)) if p.is_relative_to(ROOT) else str(path)
 
 
 def git_state() -> tuple[Optional[str], Optional[bool]]:
@@ -93,8 +97,7 @@ class Provenance:
                "load_average_mean": round(sum(self.loads) / len(self.loads), 2),
                "load_average_max": round(max(self.loads), 2)}
         if checkpoint is not None:
-            out["checkpoint"] = str(Path(checkpoint).resolve().relative_to(ROOT)) \
-                if Path(checkpoint).resolve().is_relative_to(ROOT) else str(checkpoint)
+            out["checkpoint"] = repo_relative(checkpoint)
             out["checkpoint_sha256"] = sha256(checkpoint)
         if seed is not None:
             out["episodes_seed"] = seed

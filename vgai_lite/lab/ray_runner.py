@@ -6,7 +6,7 @@ Introduced in notebook 10 (the appendix). The plan is ``reproduce.plan``'s, unch
   **cell task**; each declares ``num_cpus`` = the torch threads it runs with (``--threads``).
 * A cell task depends on its model's training task through the task's object reference, so Ray
   starts it when the model is ready, on whichever machine has a free CPU.
-* VGAI runs that share their first stage (``vgai_training.stage1_identity``: Table 1b's K = 2, 3, 4)
+* VGAI runs that share their first stage (``stage1_cache.stage1_identity``: Table 1b's K = 2, 3, 4)
   train one after the other, each depending on the previous one's reference, so that the second finds
   the first's stage 1 in ``OUT/stage1/`` exactly as in a serial run.
 * The tasks call the same functions as the serial loop (``table_cells.obtain`` and ``evaluate_cell``)
@@ -31,7 +31,7 @@ from ..checkpoints import config_hash
 from ..config import FlockConfig
 from .table_cells import cell_path, evaluate_cell, obtain
 from ..vgai_config import VGAITrainConfig
-from ..vgai_training import stage1_identity
+from .stage1_cache import stage1_identity
 
 INSTALL = "pip install -r requirements-cluster.txt"
 

@@ -31,7 +31,6 @@ import dataclasses
 import importlib.metadata as md
 import json
 import platform
-import subprocess
 import sys
 import time
 import warnings
@@ -42,11 +41,12 @@ from typing import Optional, Union
 import torch
 from tqdm.auto import tqdm
 
-from ..book import DATA_DIR, ROOT, TEST_SEED
+from ..book import DATA_DIR, QUICK_T, QUICK_TRAIN_N, TEST_SEED, shipped_file
 from ..config import FlockConfig
 from ..dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
-from .runs import VGAI_RUNS
+from .provenance import git_state
+from .runs import VGAI_RUNS, training_minutes
 from .ray_runner import run_jobs
 from .table_cells import ModelSpec, evaluate_cell, model_path
 from ..vgai_config import VGAITrainConfig, book_recipe
@@ -62,7 +62,7 @@ class ReproduceConfig:
             VGAI episode renders N'^2 drone views per step.
         seed: seed of the initial conditions (the book's TEST_SEED: the tables report, they choose nothing).
         seeds: training seeds 0..seeds-1 of the DAGNN rows (spread over training seeds);
-        vgai_seeds: the same for VGAI (each costs a VGAI training of about 50 minutes).
+        vgai_seeds: the same for VGAI (each costs a VGAI training: ``runs.training_minutes`` of its record).
         quick: tiny trainings and short episodes, every table in small form (the tests).
         repair_from: N' from which initial conditions use the "repair" sampler (whole-swarm rejection
             accepts about 1 draw in 400,000 at N' = 75).
@@ -87,11 +87,6 @@ class ReproduceConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
-
-
-QUICK_T, QUICK_TRAIN_N = 30, 12
-"""Quick mode: steps per episode (full: FlockConfig.T = 200), and agents in a VGAI training (full: N = 50;
-rendering their views is its cost; its cells still fly the columns' N)."""
 
 
 def _quick_dagnn(t: DAGNNTrainConfig) -> DAGNNTrainConfig:
@@ -198,7 +193,8 @@ def plan(rc: ReproduceConfig, tables: list[str]) -> list[tuple]:
     return jobs
 
 
-TRAIN_SECONDS = {"local": 0.0, "dagnn": 60.0, "vgai": 800.0}
+TRAIN_SECONDS = {"local": 0.0, "dagnn": 60.0,
+                 "vgai": 60.0 * training_minutes(json.loads(shipped_file("vgai/vgai_F24.json").read_text()))}
 EPISODE_SECONDS = {"local": 0.1, "dagnn": 0.2, "vgai": 3.0}
 """Rough seconds to train a model and to fly one episode of 200 steps with 50 agents on this
 machine: the progress display's estimate of the time left (nothing else uses them)."""
@@ -226,13 +222,7 @@ def provenance(rc: ReproduceConfig, seconds: float, started: str) -> dict:
         except md.PackageNotFoundError:
             return None
 
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
-                                check=True).stdout.strip()
-        dirty = bool(subprocess.run(["git", "status", "--porcelain", "--", "vgai_lite"], cwd=ROOT,
-                                    capture_output=True, text=True).stdout.strip())
-    except (OSError, subprocess.CalledProcessError):
-        commit, dirty = None, None
+    commit, dirty = git_state()
     return {"reproduce_config": dataclasses.asdict(rc), "started": started, "wall_seconds": round(seconds, 1),
             "git_commit": commit, "library_modified_since_commit": dirty,
             "python": platform.python_version(), "platform": platform.platform(),

@@ -14,7 +14,6 @@ checkpoint's bytes, so a retrained controller gets new cells. ``OUT/results.json
 
 from __future__ import annotations
 
-import hashlib
 import json
 import time
 from dataclasses import asdict, dataclass
@@ -24,11 +23,12 @@ from typing import Optional, Union
 import torch
 from tqdm.auto import tqdm
 
-from ..book import DATA_DIR, TEST_SEED
+from ..book import DATA_DIR, QUICK_T, TEST_SEED
 from ..checkpoints import load_controller
 from ..config import FlockConfig
 from ..controllers import LocalController
 from ..evaluate import FLOCK_TIMES, relative_cost
+from .provenance import sha256
 from .table_cells import cached_cell
 from .perturbations import (Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, PositionNoise,
                             perturbed)
@@ -85,7 +85,7 @@ class RobustnessConfig:
             2 s (T = 200 steps), to keep the largest VGAI flights in minutes.
         seed: the episodes (the book's TEST_SEED, as the tables: every figure here is reported, none
             chooses anything; ``large_perturbations`` and the sizes were read off an earlier sweep on
-            EVAL_SEED's episodes); the perturbations' draws use it too.
+            WORKING_SEED's episodes); the perturbations' draws use it too.
         quick: a tiny sweep of short episodes (the tests).
     """
 
@@ -115,8 +115,6 @@ class RobustnessConfig:
                                 combined=(), large_teams=(), episodes=2, flock_times=(0.2,), quick=True)
 
 
-QUICK_T = 20
-"""Steps per episode of the quick sweep."""
 
 
 def flight(rc: RobustnessConfig, N: int = 50) -> FlockConfig:
@@ -147,8 +145,9 @@ def plan(rc: RobustnessConfig) -> list[dict]:
     return cells
 
 
-def _file_hash(path: Path) -> str:
-    return hashlib.sha1(Path(path).read_bytes()).hexdigest()[:12]
+def checkpoint_id(path: Path) -> str:
+    """The first 12 digits of a checkpoint's sha256: what a cell's key knows of the controller it flew."""
+    return sha256(path)[:12]
 
 
 def controller_for(name: str, cfg: FlockConfig, perturbations: tuple, seed: int):
@@ -167,7 +166,7 @@ def evaluate(cell: dict, rc: RobustnessConfig, out: Path) -> dict:
     episodes = rc.episodes if cell["N"] < 100 else rc.episodes_large
     times = tuple(rc.flock_times) if cell["N"] < 100 else (min(rc.flock_times),)
     ident = {"controller": cell["controller"], "perturbations": [list(p) for p in cell["perturbations"]],
-             "checkpoint": _file_hash(CONTROLLERS[cell["controller"]]) if cell["controller"] in CONTROLLERS else None,
+             "checkpoint": checkpoint_id(CONTROLLERS[cell["controller"]]) if cell["controller"] in CONTROLLERS else None,
              "flight": cfg.to_dict(), "episodes": episodes, "seed": rc.seed, "flock_times": list(times)}
 
     def fly(key: str) -> dict:

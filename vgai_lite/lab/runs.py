@@ -16,7 +16,7 @@ import shutil
 from pathlib import Path
 from typing import Optional, Union
 
-from ..book import DATA_DIR, EVAL_SEED, SELECTION_SEED, VALIDATION_SEED
+from ..book import DATA_DIR, VALIDATION_SEED, WORKING_SEED
 from ..checkpoints import is_finished_with, load_estimator, save_estimator
 from ..config import FlockConfig
 from ..dagnn_training import DAGNNTrainConfig, train_dagnn
@@ -26,6 +26,7 @@ from .provenance import Provenance, sha256
 from ..state_estimation import estimator_quality, train_state_estimator
 from ..vgai_config import VGAITrainConfig, book_recipe
 from ..vgai_training import train_vgai
+from .stage1_cache import cached
 from ..vision import VisionConfig
 
 DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
@@ -41,8 +42,8 @@ DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
 """The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name."""
 
 VGAI_SEEDS = 3
-"""Training seeds of the default VGAI the book ships (``train-vgai --seeds``; about 50 minutes apiece
-beside another training, one thread each)."""
+"""Training seeds of the default VGAI the book ships (``train-vgai --seeds``; how long each took is in
+its record, data/vgai/seeds/NAME.json)."""
 
 VGAI_SEED_RUNS: dict[str, VGAITrainConfig] = {f"vgai_F24_seed{s}": book_recipe(seed=s) for s in range(VGAI_SEEDS)}
 """Trainings of the default VGAI that differ only in the training seed, in data/vgai/seeds/: how far
@@ -50,7 +51,7 @@ apart trainings land, and the pool the book's vgai_F24 is chosen from (``choose_
 
 VGAI_F24_SEED = 0
 """The training seed of the book's vgai_F24: the one of VGAI_SEED_RUNS with the lowest relative cost
-on the selection episodes (book.SELECTION_SEED, never the evaluation seed), as chosen and recorded
+on the validation episodes (book.VALIDATION_SEED, never the test seed), as chosen and recorded
 in data/vgai/seeds/choice.json by ``python -m vgai_lite train-vgai --choose`` (a test checks the two agree)."""
 
 VGAI_RUNS: dict[str, VGAITrainConfig] = {
@@ -117,7 +118,7 @@ def _check_name(name: str, runs: dict, kind: str) -> None:
 
 
 def _book_model(name: str, runs: dict, folder: str, train, retrain: bool, episodes: int, progress: bool,
-                write_json: bool, record, seed: int = EVAL_SEED, **train_kwargs):
+                write_json: bool, record, seed: int = WORKING_SEED, **train_kwargs):
     """Load or train data/FOLDER/NAME.pt, evaluate it on ``episodes`` episodes of ``seed``; write
     NAME.json (with ``record(history)``) when trained now or asked. Returns (controller, RelativeCost)."""
     _check_name(name, runs, folder.split("/")[0].upper())
@@ -139,15 +140,15 @@ def _book_model(name: str, runs: dict, folder: str, train, retrain: bool, episod
 
 def book_dagnn(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
                write_json: bool = False):
-    """Load (or train, about half a minute) the book's DAGNN ``name`` and evaluate it on ``episodes``
-    held-out episodes (seed EVAL_SEED). Returns (controller, RelativeCost)."""
+    """Load (or train: its record in data/dagnn/ says how long) the book's DAGNN ``name`` and evaluate it on ``episodes``
+    held-out episodes (seed WORKING_SEED). Returns (controller, RelativeCost)."""
     return _book_model(name, DAGNN_RUNS, "dagnn", train_dagnn, retrain, episodes, progress, write_json,
-                       lambda hist: {"validation_by_round": hist["rounds"]})
+                       lambda hist: {"round_checks": hist["rounds"]})
 
 
 def book_vgai(name: str, retrain: bool = False, episodes: int = 20, progress: bool = True,
               write_json: bool = False):
-    """Load (or train, about 50 minutes) the book's VGAI ``name`` (of VGAI_RUNS, or of VGAI_SEED_RUNS
+    """Load (or train: its record in data/vgai/ says how long, ``training_minutes``) the book's VGAI ``name`` (of VGAI_RUNS, or of VGAI_SEED_RUNS
     in data/vgai/seeds/) and evaluate it on ``episodes`` validation episodes (seed VALIDATION_SEED):
     the record beside a VGAI checkpoint is the evaluation its choice was made on (``choose_seed``);
     the book reports its VGAIs on the test episodes (``tools/test_episodes.py``) and in the paper's
@@ -156,8 +157,8 @@ def book_vgai(name: str, retrain: bool = False, episodes: int = 20, progress: bo
     return _book_model(name, runs, folder, train_vgai, retrain, episodes, progress, write_json,
                        lambda hist: {"stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
                                      "stage1_cached": hist.get("stage1_cached"),  # then not in train_seconds
-                                     "validation": hist["rounds"]},
-                       seed=VALIDATION_SEED, stage1_cache=STAGE1_CACHE)
+                                     "round_checks": hist["rounds"]},
+                       seed=VALIDATION_SEED, stage1=cached(STAGE1_CACHE))
 
 
 def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress: bool = True):
@@ -172,7 +173,7 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
             return cnn, vision, meta
     cfg = FlockConfig()
     cnn, losses, seconds = train_state_estimator(cfg, vision, steps=steps, progress=progress)
-    quality = estimator_quality(cnn, vision, cfg)
+    quality = estimator_quality(cnn, vision, cfg, seed=WORKING_SEED)
     meta = {"steps": steps, "losses": losses, "seconds": seconds,
             "quality": {str(t): q for t, q in quality.items()}}
     save_estimator(path, cnn, vision, meta)
@@ -181,7 +182,7 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
 
 def choose_seed() -> dict:
     """Pick the book's vgai_F24 among the trainings of VGAI_SEED_RUNS (``train-vgai --seeds``): the
-    lowest relative cost on the selection episodes (seed SELECTION_SEED, never the test seed), read
+    lowest relative cost on the validation episodes (seed VALIDATION_SEED, never the test seed), read
     from each seed's record (``book_vgai``'s evaluation, checked to be of that checkpoint and those
     episodes). Copies the chosen checkpoint and its record to data/vgai/vgai_F24.pt / .json, writes
     data/vgai/seeds/choice.json, and returns that record. VGAI_F24_SEED must then name the chosen seed."""
@@ -194,15 +195,15 @@ def choose_seed() -> dict:
                                     "run `python -m vgai_lite train-vgai --seeds` first")
         rec = json.loads(path.with_suffix(".json").read_text())
         prov = rec["provenance"].get("evaluation", rec["provenance"])
-        if prov["checkpoint_sha256"] != sha256(path) or rec["seed"] != SELECTION_SEED:
-            raise ValueError(f"{path.with_suffix('.json')} is not an evaluation of {path.name} on the selection "
-                             f"episodes (seed {SELECTION_SEED}): run `python -m vgai_lite train-vgai {name}`")
+        if prov["checkpoint_sha256"] != sha256(path) or rec["seed"] != VALIDATION_SEED:
+            raise ValueError(f"{path.with_suffix('.json')} is not an evaluation of {path.name} on the validation "
+                             f"episodes (seed {VALIDATION_SEED}): run `python -m vgai_lite train-vgai {name}`")
         candidates[name] = {k: rec[k] for k in ("relative_cost_mean", "relative_cost_mean_ci95", "episodes", "seed")}
         candidates[name]["training_seed"] = tcfg.seed
     best = min(candidates, key=lambda n: candidates[n]["relative_cost_mean"])
     for suffix in (".pt", ".json"):
         shutil.copyfile(folder / "seeds" / f"{best}{suffix}", folder / f"vgai_F24{suffix}")
-    record = {"rule": "lowest relative cost on the selection episodes", "selection_seed": SELECTION_SEED,
+    record = {"rule": "lowest relative cost on the validation episodes", "validation_seed": VALIDATION_SEED,
               "episodes": candidates[best]["episodes"], "chosen": best, "chosen_seed": VGAI_SEED_RUNS[best].seed,
               "chosen_sha256": sha256(folder / "vgai_F24.pt"), "candidates": candidates}
     (folder / "seeds" / "choice.json").write_text(json.dumps(record, indent=1) + "\n")

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
 
-from ..book import DATA_DIR, ROOT
+from ..book import DATA_DIR
 from ..checkpoints import config_hash, is_finished_with, load_controller
 from ..config import FlockConfig
 from ..controllers import LocalController
@@ -25,6 +25,8 @@ from ..evaluate import FLOCK_TIMES, relative_cost
 from ..imitation import load_or_train
 from .runs import DAGNN_RUNS, VGAI_RUNS, VGAI_SEED_RUNS
 from ..vgai_training import train_vgai
+from .provenance import repo_relative
+from .stage1_cache import cached
 
 
 @dataclass(frozen=True)
@@ -57,9 +59,9 @@ def _shipped_path(spec: ModelSpec) -> Optional[Path]:
     return None
 
 
-QUICK_VALIDATION_EPISODES = 2
-"""Validation episodes a quick run's training (short episodes, ``reproduce --quick``) logs after each
-round (a full run: 10); the log never chooses anything, so fewer only save the test suite time."""
+QUICK_CHECK_EPISODES = 2
+"""Episodes of the round check a quick run's training (short episodes, ``reproduce --quick``) logs after
+each round (a full run: 10); the log never chooses anything, so fewer only save the test suite time."""
 
 
 def model_path(spec: ModelSpec, out: Path) -> Path:
@@ -78,13 +80,13 @@ def obtain(spec: ModelSpec, out: Path, progress: bool = False,
     trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
     start = time.perf_counter()
     if trained:  # otherwise the checkpoint is ready; evaluate_cell loads it in the flight configuration
-        # the validation after each round is logged, never used to choose: a quick run logs fewer
-        val = {"validation_episodes": QUICK_VALIDATION_EPISODES} if spec.cfg.T < 200 else {}
+        # the round check is logged, never used to choose: a quick run logs fewer episodes
+        val = {"check_episodes": QUICK_CHECK_EPISODES} if spec.cfg.T < 200 else {}
         if spec.kind == "dagnn":
             load_or_train(path, spec.cfg, spec.tcfg, train_dagnn, retrain=retrain, progress=progress, **val)
         else:
             load_or_train(path, spec.cfg, spec.tcfg, train_vgai, retrain=retrain, progress=progress,
-                          stage1_cache=out / "stage1", **val)
+                          stage1=cached(out / "stage1"), **val)
     return path, time.perf_counter() - start, trained
 
 
@@ -124,8 +126,7 @@ def _fly_cell(key, ident, spec, flight, episodes, seed, out, progress, retrain, 
               "eval_seconds": round(time.perf_counter() - start, 1),
               "train_seconds_now": round(train_seconds, 1) if trained else 0.0,
               "trained_now": trained,
-              "checkpoint": (str(Path(ckpt).resolve().relative_to(ROOT.resolve()))
-                             if ckpt is not None and _inside(ckpt, ROOT) else (str(ckpt) if ckpt else None))}
+              "checkpoint": repo_relative(ckpt) if ckpt is not None else None}
     if spec.kind != "local":
         record["train_seconds_recorded"] = round(controller.meta.get("history", {}).get("seconds", 0.0), 1)
     return record
@@ -145,10 +146,3 @@ def cached_cell(out: Path, ident: dict, compute: Callable[[str], dict], fresh: b
     path.write_text(json.dumps(record, indent=1) + "\n")
     return {**record, "computed_now": True}
 
-
-def _inside(path, root) -> bool:
-    try:
-        Path(path).resolve().relative_to(Path(root).resolve())
-        return True
-    except ValueError:
-        return False
