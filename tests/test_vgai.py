@@ -5,6 +5,7 @@ import dataclasses
 import pytest
 import torch
 
+from vgai_lite import ExpertController as vl_expert
 from vgai_lite import FlockConfig, rollout, sample_initial_state, saturate
 from vgai_lite.checkpoints import load_controller, save_controller
 from vgai_lite.aggregation import aggregation_sequence
@@ -14,8 +15,10 @@ from vgai_lite.learned_controllers import VGAIController
 from vgai_lite.models import AggregationMLP, OddMotionCNN, ResidualBlock, VGAIModel, VisualCNN
 from vgai_lite.render import RenderConfig
 from vgai_lite.vgai_config import VGAITrainConfig
-from vgai_lite.vgai_training import bptt_loss, stage1_cache_file, train_vgai
-from vgai_lite.vision import MOTION_SCALE, VisionConfig, camera_input, stored_images
+from vgai_lite.lab.stage1_cache import cached, stage1_file
+from vgai_lite.vgai_training import (bptt_loss, joint_loss, sample_windows, synthetic_velocities, train_vgai,
+                                     window_batch)
+from vgai_lite.vision import VisionConfig, camera_input, stored_images
 
 CFG = FlockConfig(N=20)
 VISION = VisionConfig(render=RenderConfig(view_height=8, view_width=16))
@@ -38,7 +41,11 @@ def test_the_cnn_keeps_every_column_until_the_fully_connected_layers():
     trunk = cnn.blocks(torch.relu(cnn.stem(torch.randn(3, 4, 12, 128))))
     assert trunk.shape == (3, 16, 1, 128)          # all rows pooled away, all 128 bearings kept
     assert cnn(torch.randn(3, 4, 12, 128)).shape == (3, 24)
-    assert cnn.flops_per_image() > 0
+    from torch.utils.flop_counter import FlopCounterMode
+
+    with FlopCounterMode(display=False) as counted:  # torch's own count of one image's convolutions and matmuls
+        cnn(torch.randn(1, 4, 12, 128))
+    assert cnn.flops_per_image() == counted.get_total_flops()
     with pytest.raises(ValueError, match="expects images"):
         cnn(torch.randn(3, 4, 12, 64))
 
@@ -64,7 +71,7 @@ def test_prehistory_frames_are_the_initial_state_flown_backwards():
     traj = rollout(make_vgai(vision=vision), cfg, r0, v0)
     img = stored_images(vision, cfg, traj.r, traj.v, torch.tensor([0]), torch.tensor([2]))
     now, earlier = vision.frame(traj.r[2], cfg), vision.frame(r0 + (2 - vision.motion_gap) * cfg.Ts * v0, cfg)
-    torch.testing.assert_close(img, torch.cat((now, MOTION_SCALE * (now - earlier)), dim=2), atol=1e-5, rtol=1e-5)
+    torch.testing.assert_close(img, torch.cat((now, vision.motion_scale * (now - earlier)), dim=2), atol=1e-5, rtol=1e-5)
 
 
 def test_the_controller_and_the_bptt_window_compute_the_same_actions():
@@ -164,15 +171,88 @@ def test_bad_vision_configs_are_refused():
         VGAIController(c.model, CFG, VisionConfig(motion_gap=0, render=VISION.render))
 
 
-def test_a_miniature_vgai_training_runs_end_to_end_and_backpropagates_through_K_steps(tmp_path):
+MINI = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
+                       expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
+                       warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
+
+
+def test_a_miniature_vgai_training_changes_both_networks_and_saves_what_it_learned(tmp_path):
+    """Every stage runs and learns: stage 1 and stage 3 move the CNN, stages 2 and 3 the MLP, and the
+    checkpoint holds the trained weights and the full configuration."""
     cfg = FlockConfig(N=12, T=20)
-    tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
-                           expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
-                           warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
-    ctrl, hist = train_vgai(cfg, tcfg, checkpoint=tmp_path / "v.pt", progress=False, check_episodes=1)
+    ctrl, hist = train_vgai(cfg, MINI, checkpoint=tmp_path / "v.pt", progress=False, check_episodes=1)
     assert len(hist["warm_loss"]) == 3 and len(hist["joint_loss"]) == 2 and len(hist["rounds"]) == 2
+    with torch.random.fork_rng():
+        torch.manual_seed(MINI.seed)
+        fresh = MINI.new_model()  # the weights the training started from
+    for part in ("cnn", "mlp"):
+        before, after = getattr(fresh, part).state_dict(), getattr(ctrl.model, part).state_dict()
+        assert any(not torch.equal(before[k], after[k]) for k in before if before[k].is_floating_point())
     loaded = load_controller(tmp_path / "v.pt")
     assert loaded.meta["finished"] and loaded.K == 3
+    assert VGAITrainConfig.from_dict(loaded.meta["train_config"]) == MINI
+    for k, t in ctrl.model.state_dict().items():
+        torch.testing.assert_close(loaded.model.state_dict()[k], t)
+
+
+def _unrolled_eq10(cnn, mlp, images, S, u_star, valid):
+    """Eq. 6 written out term by term for each window's last step, then eq. 10: an independent
+    computation of what bptt_loss must give (no aggregation_sequence, no batching over windows)."""
+    M, K, N = images.shape[:3]
+    losses = []
+    for m in range(M):
+        X = [cnn(images[m, k]) * float(valid[m, k]) for k in range(K)]  # (N, F) per step, 0 before the flight
+        Ss = [S[m, k] * float(valid[m, k]) for k in range(K)]
+        taps, prod = [], torch.eye(N, dtype=images.dtype)
+        for k in range(K):  # tap k: S(t) S(t-1) ... S(t-k+1) X(t-k)
+            taps.append(prod @ X[K - 1 - k])
+            prod = prod @ Ss[K - 1 - k]
+        losses.append((mlp(torch.stack(taps, dim=1)) - u_star[m]).abs())  # (N, 2)
+    return torch.stack(losses).mean()
+
+
+def test_bptt_loss_is_eq_10_of_the_unrolled_aggregation_and_reaches_every_step():
+    """bptt_loss (figure 3) against eq. 6 unrolled by hand: the same value and the same gradients on
+    every step's images, with and without windows that begin before the flight."""
+    torch.manual_seed(0)
+    M, K, N, D, F = 3, 4, 7, 5, 3
+    cnn = torch.nn.Sequential(torch.nn.Linear(D, F), torch.nn.Tanh()).double()
+    mlp = torch.nn.Sequential(torch.nn.Flatten(-2), torch.nn.Linear(K * F, 2)).double()
+    model = torch.nn.Module()
+    model.cnn, model.mlp = cnn, mlp
+    images = torch.randn(M, K, N, D, dtype=torch.float64, requires_grad=True)
+    A = (torch.rand(M, K, N, N) < 0.5).double()
+    S = gso((((A + A.transpose(-1, -2)) > 0).double() * (1 - torch.eye(N, dtype=torch.float64))).flatten(0, 1))
+    S = S.view(M, K, N, N)
+    u_star = torch.randn(M, N, 2, dtype=torch.float64)
+    for valid in (torch.ones(M, K, dtype=torch.bool), torch.tensor([[False, False, True, True]] * M)):
+        got = bptt_loss(model, images, S, u_star, valid)
+        want = _unrolled_eq10(cnn, mlp, images, S, u_star, valid)
+        torch.testing.assert_close(got, want)
+        (g_got,) = torch.autograd.grad(got, images)
+        (g_want,) = torch.autograd.grad(want, images)
+        torch.testing.assert_close(g_got, g_want)
+        per_step = g_got.abs().sum(dim=(0, 2, 3))
+        assert ((per_step > 0) == valid[0]).all()  # every step inside the flight gets gradient, none before
+
+
+def test_the_training_step_is_bptt_loss_plus_the_weighted_state_estimation_loss():
+    """The joint step of stage 3 computes eq. 10 exactly as bptt_loss does (aux_weight 0), and adds
+    aux_weight times stage 1's loss on the same images otherwise."""
+    cfg = FlockConfig(N=12, T=20)
+    r0, v0 = sample_initial_state(cfg, 2, torch.Generator().manual_seed(2))
+    traj = rollout(vl_expert(cfg), cfg, r0, v0)
+    model = dataclasses.replace(MINI, motion_features=2).new_model()
+    e, t_end = sample_windows(cfg.T, 2, MINI, torch.Generator().manual_seed(3))
+    w = window_batch(cfg, MINI, traj.r, traj.v, traj.u, e, t_end)
+    plain = bptt_loss(model, w["images"], w["S"], w["u_star"], w["valid"])
+    torch.testing.assert_close(joint_loss(model, MINI, w), plain)
+    weighted = dataclasses.replace(MINI, aux_weight=2.0)
+    aux = joint_loss(model, weighted, w) - plain
+    assert aux > 0
+    from vgai_lite.vgai_training import estimation_loss, window_features
+    torch.testing.assert_close(aux, 2.0 * estimation_loss(model.cnn, window_features(model.cnn, w["images"]),
+                                                           w["x_exact"]))
 
 
 def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_path):
@@ -183,18 +263,18 @@ def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_p
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
     plain, _ = train_vgai(cfg, tcfg, progress=False, check_episodes=1)
-    first, h1 = train_vgai(cfg, tcfg, progress=False, check_episodes=1, stage1_cache=tmp_path)
-    assert stage1_cache_file(tmp_path, cfg, tcfg).is_file() and "stage1_cached" not in h1
-    again, h2 = train_vgai(cfg, tcfg, progress=False, check_episodes=1, stage1_cache=tmp_path)
-    assert h2["stage1_cached"] == stage1_cache_file(tmp_path, cfg, tcfg).name
+    first, h1 = train_vgai(cfg, tcfg, progress=False, check_episodes=1, stage1=cached(tmp_path))
+    assert stage1_file(tmp_path, cfg, tcfg).is_file() and "stage1_cached" not in h1
+    again, h2 = train_vgai(cfg, tcfg, progress=False, check_episodes=1, stage1=cached(tmp_path))
+    assert h2["stage1_cached"] == stage1_file(tmp_path, cfg, tcfg).name
     assert h2["warm_loss"] == h1["warm_loss"]
     for a, b, c in zip(plain.model.state_dict().values(), first.model.state_dict().values(),
                        again.model.state_dict().values()):
         assert torch.equal(a, b) and torch.equal(b, c)
     # K does not enter stage 1, F does
-    assert stage1_cache_file(tmp_path, cfg, dataclasses.replace(tcfg, K=2)) == stage1_cache_file(tmp_path, cfg, tcfg)
-    assert stage1_cache_file(tmp_path, cfg, dataclasses.replace(tcfg, F=12)) != stage1_cache_file(tmp_path, cfg, tcfg)
-    assert stage1_cache_file(tmp_path, cfg.replace(R=2.0), tcfg) != stage1_cache_file(tmp_path, cfg, tcfg)
+    assert stage1_file(tmp_path, cfg, dataclasses.replace(tcfg, K=2)) == stage1_file(tmp_path, cfg, tcfg)
+    assert stage1_file(tmp_path, cfg, dataclasses.replace(tcfg, F=12)) != stage1_file(tmp_path, cfg, tcfg)
+    assert stage1_file(tmp_path, cfg.replace(R=2.0), tcfg) != stage1_file(tmp_path, cfg, tcfg)
 
 
 def test_gradients_reach_the_cnn_through_every_step_of_the_window():
@@ -223,15 +303,14 @@ def test_state_estimator_files_round_trip(tmp_path):
 
 
 def test_synthetic_velocities_span_the_disagreements_late_and_early_flights_have():
-    from vgai_lite.state_estimation import SYNTHETIC_SPEEDS, synthetic_velocities
-
+    SYNTHETIC_SPEEDS = VGAITrainConfig().synthetic_speeds
     v = torch.zeros(400, 30, 2) + torch.tensor([2.0, -1.0])
-    vs = synthetic_velocities(v, torch.Generator().manual_seed(0))
+    vs = synthetic_velocities(v, SYNTHETIC_SPEEDS, torch.Generator().manual_seed(0))
     spread = (vs - vs.mean(1, keepdim=True)).std(dim=(1, 2))  # one scale per swarm
     assert vs.shape == v.shape
     assert SYNTHETIC_SPEEDS[0] / 2 < spread.min() < 3 * SYNTHETIC_SPEEDS[0] and spread.max() > SYNTHETIC_SPEEDS[1] / 2
     torch.testing.assert_close(vs.mean(dim=(0, 1)), torch.tensor([2.0, -1.0]), atol=0.1, rtol=0)
-    torch.testing.assert_close(synthetic_velocities(v, torch.Generator().manual_seed(0)), vs)
+    torch.testing.assert_close(synthetic_velocities(v, SYNTHETIC_SPEEDS, torch.Generator().manual_seed(0)), vs)
 
 
 def test_motion_features_vanish_when_nothing_moves_and_flip_with_the_motion():
