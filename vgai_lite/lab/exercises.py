@@ -104,9 +104,9 @@ def _record(result: "CheckResult") -> None:
                                 "message": result.message}) + "\n")
 
 
-def score(notebook: str) -> dict:
-    """Print and return this notebook's score from the checks run so far in this session:
-    {"score": passed, "max_score": number of exercises, "exercises": {id: passed}}."""
+def score(notebook: str) -> None:
+    """Print this notebook's score from the checks run so far in this session, one line per exercise
+    (it returns nothing: what a notebook shows of it is the same in JupyterLab and under nbval)."""
     ids = exercises_of(notebook)
     passed = {k: bool(RESULTS.get(k)) for k in ids}
     for k in ids:
@@ -114,7 +114,6 @@ def score(notebook: str) -> dict:
         print(f"  {k} {EXERCISES[k]:45s} {state}")
     total = sum(passed.values())
     print(f"Score for notebook {notebook}: {total}/{len(ids)}")
-    return {"score": total, "max_score": len(ids), "exercises": passed}
 
 
 def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
