@@ -4,7 +4,8 @@
 
 - every VGAI training configuration stored in a checkpoint or a record gets every field of
   VGAITrainConfig (to_dict no longer drops the fields that are 0; mlp_batch, mlp_late_stride and
-  synthetic_speeds, hidden constants before, with the values they had), and every vision configuration
+  synthetic_speeds, hidden constants before, with the values they had; camera, the ideal one they
+  were trained with), and every vision configuration
   its motion_scale (5.0, the former vision.MOTION_SCALE). The weights are not touched.
 - the round checks' keys val_relative_cost / val_share_below_0.05m become check_relative_cost /
   check_share_below_0.05m; choice.json's selection_seed becomes validation_seed.
@@ -34,7 +35,9 @@ DATA = ROOT / "data"
 OLD_COMMIT = "b9be2ec"
 REMOVED_KNOBS = ("flight_steps", "joint_early_share", "mlp_on_exact", "anchor_weight")
 NEW_DEFAULTS = {"synthetic_share": 0.0, "motion_features": 0, "aux_weight": 0.0, "learner_swarms": 0.0,
-                "mlp_batch": 1024, "mlp_late_stride": 4, "synthetic_speeds": [0.01, 1.5]}
+                "mlp_batch": 1024, "mlp_late_stride": 4, "synthetic_speeds": [0.01, 1.5],
+                "camera": {"noise": [0.0, 0.0], "blur_deg": [0.0, 0.0], "gain": [1.0, 1.0], "offset": [0.0, 0.0],
+                           "dead_share": 0.0}}
 VISION_KEYS = {"view", "render", "motion_gap", "motion_mode", "prehistory"}
 TRAIN_KEYS = {"F", "K", "cnn_widths", "cnn_hidden", "vision", "warm_steps"}
 RENAMES = {"val_relative_cost": "check_relative_cost", "val_share_below_0.05m": "check_share_below_0.05m",
@@ -77,6 +80,7 @@ def main() -> int:
         atomic_save(new, path)
         sha_map[hashlib.sha256(raw).hexdigest()] = hashlib.sha256(path.read_bytes()).hexdigest()
         id_map[hashlib.sha1(raw).hexdigest()[:12]] = sha_map[hashlib.sha256(raw).hexdigest()][:12]
+        id_map[hashlib.sha256(raw).hexdigest()[:12]] = sha_map[hashlib.sha256(raw).hexdigest()][:12]
     for path in sorted(DATA.rglob("*.json")):
         text = path.read_text()
         indent = 1 if text.startswith("{\n \"") else 2

@@ -12,8 +12,9 @@ per idea; data flow one way: a module imports only modules listed before it here
                      late in a flight, cohesion), ``evaluate`` (relative cost, close calls and the
                      flocking figures beside it), ``features`` (the DAGNN's 6 exact local features),
                      ``aggregation`` (Z(t), eq. 6)
-  what drones see    ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference), ``vision``
-                     (the CNN's input: frames, motion, one image pipeline)
+  what drones see    ``render`` (panoramas, top-down crops), ``physics`` (pymunk reference), ``camera``
+                     (what a real camera does to a frame: blur, exposure, noise, a dead camera),
+                     ``vision`` (the CNN's input: frames, motion, one image pipeline)
   learning           ``models`` (AggregationMLP eqs. 7-8, VisualCNN), ``learned_controllers``
                      (DAGNNController, VGAIController), ``checkpoints`` (files), ``imitation`` (DAgger,
                      what both trainings share), ``dagnn_training``, ``vgai_config`` (what defines a
@@ -48,6 +49,7 @@ from .render import RenderConfig, render_egocentric, render_topdown
 from .state_estimation import train_state_estimator
 from .vgai_config import BOOK, PAPER, VGAITrainConfig, book_recipe
 from .vgai_training import bptt_loss, train_vgai
+from .camera import Camera, CameraRanges
 from .vision import VisionConfig, camera_input
 
 __version__ = "0.1.0"
@@ -58,7 +60,7 @@ __all__ = [
     "potential", "potential_gradient", "ExpertController", "LocalController", "relative_cost",
     "RelativeCost", "adjacency", "gso", "k_hop_reach", "local_features", "AggregationBuffer",
     "aggregation_sequence", "RenderConfig", "render_egocentric", "render_topdown", "VisionConfig",
-    "camera_input", "AggregationMLP", "VisualCNN", "OddMotionCNN", "VGAIModel", "DAGNNController", "VGAIController",
+    "camera_input", "Camera", "CameraRanges", "AggregationMLP", "VisualCNN", "OddMotionCNN", "VGAIModel", "DAGNNController", "VGAIController",
     "save_controller", "load_controller", "load_estimator", "dagger_mix", "fly_dagger", "load_or_train",
     "DAGNNTrainConfig", "train_dagnn", "VGAITrainConfig", "PAPER", "BOOK", "book_recipe", "train_vgai", "bptt_loss",
     "train_state_estimator", "consensus", "Consensus",

@@ -122,6 +122,10 @@ class VGAIController(_Learned):
         self.model, self.cfg, self.vision, self.gso_kind = model, cfg, vision, gso_kind
         self.buffer = AggregationBuffer(model.mlp.K)
         self.seen: list = []  # positions of the last g + 1 steps, oldest first
+        self.t = 0  # steps since reset
+        self.camera = None
+        """A ``camera.Camera`` the drones see through (training flies the learner through its drawn
+        cameras); None: the renderer's frames as they are."""
 
     @property
     def K(self) -> int:
@@ -130,6 +134,7 @@ class VGAIController(_Learned):
     def reset(self) -> None:
         self.buffer.reset()
         self.seen = []
+        self.t = 0
 
     def remember(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
         """Advance the frame memory by one step: store r, return the positions g steps ago (the oldest
@@ -156,7 +161,8 @@ class VGAIController(_Learned):
     def observe(self, r: torch.Tensor, v: torch.Tensor = None) -> torch.Tensor:
         """One step: advance the frame memory (``remember``), X(t) = CNN_Psi of the images, push X(t)
         and S(t) into the buffer; returns Z(t), (B, N, K, F)."""
-        X = self.features(r, self.remember(r, v))
+        X = self.features(r, self.remember(r, v), self.camera.at(self.t) if self.camera is not None else None)
+        self.t += 1
         return self.buffer.push(X, gso(adjacency(r, self.cfg.R), self.gso_kind))
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:

@@ -14,6 +14,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Optional
 
+from .camera import CameraRanges
 from .config import config_dict
 from .graphs import DEFAULT_GSO
 from .models import AggregationMLP, VGAIModel, visual_cnn
@@ -63,6 +64,11 @@ class VGAITrainConfig:
             learner's own drifting leads to, late in a flight, labelled with the expert's braking.
             The book's recipe: 0.5, the one change that made VGAI flock (notebook 06: three training
             seeds, each with velocity variance at 5 s below the book's threshold; 0: the paper's mixture alone).
+        camera: what the training's cameras do to the rendered frames, drawn per flight and per
+            training window (``camera.CameraRanges``: sensor noise, lens blur, exposure, a dead
+            camera; domain randomisation). Every stage sees the frames through it: stage 1's states,
+            stage 2's flights, stage 3's windows and the learner's own DAgger flights. Default: the
+            ideal camera (the paper renders clean AirSim frames).
     """
 
     F: int = 24
@@ -92,6 +98,7 @@ class VGAITrainConfig:
     motion_features: Optional[int] = 0
     aux_weight: float = 0.0
     learner_swarms: float = 0.0
+    camera: CameraRanges = CameraRanges()
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
@@ -134,7 +141,7 @@ class VGAITrainConfig:
         if missing or unknown:
             raise ValueError(f"a VGAI training configuration lacks {missing} and has unknown fields {unknown}: "
                              "it was written by another version of vgai_lite; train the model again")
-        d = {**d, "vision": VisionConfig.from_dict(d["vision"])}
+        d = {**d, "vision": VisionConfig.from_dict(d["vision"]), "camera": CameraRanges.from_dict(d["camera"])}
         for name in ("hidden", "cnn_widths", "synthetic_speeds"):
             d[name] = tuple(d[name])
         return VGAITrainConfig(**d)

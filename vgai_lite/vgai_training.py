@@ -33,6 +33,7 @@ import torch.nn.functional as nnf
 from tqdm.auto import tqdm
 
 from .aggregation import aggregation_sequence
+from .camera import draw_camera
 from .checkpoints import save_controller
 from .config import FlockConfig
 from .features import N_LOCAL_FEATURES, local_features
@@ -77,19 +78,22 @@ def synthetic_velocities(v: torch.Tensor, speeds: tuple, gen: torch.Generator) -
 def estimation_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
                      gen: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
     """``tcfg.warm_states`` stored swarm states of flights r, v (T, E, N, 2): every agent's image
-    (M, N, C, H, W) and its exact local features (M, N, 6). A ``tcfg.synthetic_share`` of them is shown
-    with synthetic velocities (the motion frame drawn from the state flown backwards at them)."""
+    (M, N, C, H, W) and its exact local features (M, N, 6), seen through cameras drawn from
+    ``tcfg.camera``. A ``tcfg.synthetic_share`` of them is shown with synthetic velocities (the motion
+    frame drawn from the state flown backwards at them)."""
     T, E = r.shape[:2]
     vision, states = tcfg.vision, tcfg.warm_states
     e = torch.randint(0, E, (states,), generator=gen)
     t = sample_times(states, T, tcfg, gen)
+    cam = draw_camera(tcfg.camera, vision.render, states, cfg.N, gen)
+    camera = cam.at(0) if cam is not None else None
     if tcfg.synthetic_share <= 0:
-        return stored_images(vision, cfg, r, v, e, t), local_features(r[t, e], v[t, e], cfg.R)
+        return stored_images(vision, cfg, r, v, e, t, camera), local_features(r[t, e], v[t, e], cfg.R)
     synth = (torch.rand(states, generator=gen) < tcfg.synthetic_share)[:, None, None]
     vs = torch.where(synth, synthetic_velocities(v[t, e], tcfg.synthetic_speeds, gen), v[t, e])
     before = torch.where(synth, flown_backwards(r[t, e], vs, vision.motion_gap, cfg.Ts),
                          positions_before(vision, cfg, r, v, e, t))
-    return camera_input(vision, cfg, r[t, e], before), local_features(r[t, e], vs, cfg.R)
+    return camera_input(vision, cfg, r[t, e], before, camera), local_features(r[t, e], vs, cfg.R)
 
 
 def estimation_loss(cnn: VisualCNN, X: torch.Tensor, x_exact: torch.Tensor) -> torch.Tensor:
@@ -139,12 +143,15 @@ def fit_stage1(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch
 def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
             u: torch.Tensor, gen: torch.Generator, progress: bool = True) -> list:
     """Fit NN_Theta on Z(t) built from the frozen CNN's features along stored flights r, v, u*
-    (T, E, N, 2), like the DAGNN on its exact features. Returns the mean L1 loss per epoch."""
+    (T, E, N, 2), like the DAGNN on its exact features, each flight seen through cameras drawn from
+    ``tcfg.camera``. Returns the mean L1 loss per epoch."""
     T, E = r.shape[:2]
     model.eval()
+    cam = draw_camera(tcfg.camera, tcfg.vision.render, E, cfg.N, gen)
     with torch.no_grad():
         S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
-        X = torch.stack([model.features(stored_images(tcfg.vision, cfg, r, v, torch.arange(E), torch.full((E,), t)))
+        X = torch.stack([model.features(stored_images(tcfg.vision, cfg, r, v, torch.arange(E), torch.full((E,), t),
+                                                      cam.at(t) if cam is not None else None))
                          for t in range(T)])  # (T, E, N, F)
         Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
     early = min(tcfg.early_steps, T)
@@ -233,15 +240,19 @@ def joint_loss(model: VGAIModel, tcfg: VGAITrainConfig, w: dict) -> torch.Tensor
 
 def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, tcfg: VGAITrainConfig,
                 store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True, camera=None) -> list:
-    """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights (images through
-    ``camera`` when given, see ``window_batch``). Returns the losses."""
+    """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights, each window seen through
+    cameras drawn from ``tcfg.camera`` (or through ``camera(frame, lag)`` when given). Returns the losses."""
     r, v, u = store.tensors()
     model.train()
     losses = []
     bar = tqdm(range(tcfg.joint_steps), desc=desc, disable=not progress)
     for _ in bar:
         e, t_end = sample_windows(r.shape[0], r.shape[1], tcfg, gen)
-        loss = joint_loss(model, tcfg, window_batch(cfg, tcfg, r, v, u, e, t_end, camera))
+        seen = camera
+        if seen is None:
+            cam = draw_camera(tcfg.camera, tcfg.vision.render, tcfg.windows, cfg.N, gen)
+            seen = cam.repeat(tcfg.K).at(0) if cam is not None else None
+        loss = joint_loss(model, tcfg, window_batch(cfg, tcfg, r, v, u, e, t_end, seen))
         opt.zero_grad(set_to_none=True)
         loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
         opt.step()
@@ -255,13 +266,18 @@ def dagger_round(learner: VGAIController, store: EpisodeStore, cfg: FlockConfig,
                  gen: torch.Generator) -> None:
     """One DAgger round's flights, added to ``store``: ``tcfg.episodes_per_round`` swarms, a
     ``tcfg.learner_swarms`` share of them flown by the learner alone (p = 1), the others under the
-    paper's mixture (the learner followed with probability ``tcfg.p_learner`` at each step)."""
+    paper's mixture (the learner followed with probability ``tcfg.p_learner`` at each step). The learner
+    sees through cameras drawn from ``tcfg.camera``, one per swarm for its whole flight."""
     learner.model.eval()
     p = tcfg.p_learner
     if tcfg.learner_swarms:
         alone = torch.rand(tcfg.episodes_per_round, generator=gen) < tcfg.learner_swarms
         p = torch.where(alone, 1.0, tcfg.p_learner)
-    store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), p, gen)
+    learner.camera = draw_camera(tcfg.camera, tcfg.vision.render, tcfg.episodes_per_round, cfg.N, gen)
+    try:
+        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), p, gen)
+    finally:
+        learner.camera = None  # the controller a training returns sees the renderer's frames
 
 
 # ---------------------------------------------------------------------------------------------

@@ -34,9 +34,9 @@ import math
 from typing import Optional
 
 import torch
-import torch.nn.functional as F_
 
 from ..aggregation import AggregationBuffer
+from ..camera import dead_camera, gaussian_blur, sensor_noise
 from ..flocking import check_state
 from ..graphs import adjacency, gso
 
@@ -73,35 +73,21 @@ class ImageNoise(Perturbation):
         self.sigma = _check(sigma, "ImageNoise sigma (pixel values are in [0, 1])", 0.0, 1.0)
 
     def frame(self, img, t, world, k):
-        if self.sigma == 0:
-            return img
-        n = torch.randn(img.shape, generator=world.frame_generator(t, k), dtype=img.dtype)
-        return (img + self.sigma * n.to(img.device)).clamp(0.0, 1.0)
+        return sensor_noise(img, self.sigma, world.frame_generator(t, k))
 
     def __repr__(self):
         return f"ImageNoise(sigma={self.sigma:g})"
 
 
 class Blur(Perturbation):
-    """A Gaussian blur of ``sigma`` pixels over rows and columns (the panorama wraps around)."""
+    """A Gaussian blur of ``sigma`` pixels over rows and columns (the panorama wraps around;
+    ``camera.gaussian_blur``; ``camera.blur_degrees`` says it in degrees of view)."""
 
     def __init__(self, sigma: float):
         self.sigma = _check(sigma, "Blur sigma (pixels)", 0.0, 50.0)
 
     def frame(self, img, t, world, k):
-        if self.sigma == 0:
-            return img
-        half = max(1, math.ceil(3 * self.sigma))
-        x = torch.arange(-half, half + 1, dtype=img.dtype, device=img.device)
-        g = torch.exp(-0.5 * (x / self.sigma) ** 2)
-        g = g / g.sum()
-        shape = img.shape
-        flat = img.reshape(-1, 1, shape[-2], shape[-1])
-        flat = F_.pad(flat, (half, half, 0, 0), mode="circular")            # columns wrap around
-        flat = F_.conv2d(flat, g.view(1, 1, 1, -1))
-        flat = F_.pad(flat, (0, 0, half, half), mode="replicate")           # rows end at the image
-        flat = F_.conv2d(flat, g.view(1, 1, -1, 1))
-        return flat.reshape(shape)
+        return gaussian_blur(img, self.sigma, self.sigma)
 
     def __repr__(self):
         return f"Blur(sigma={self.sigma:g} px)"
@@ -115,14 +101,9 @@ class DeadCamera(Perturbation):
         self.cameras = cameras
 
     def frame(self, img, t, world, k):
-        B, N, W = img.shape[0], img.shape[1], img.shape[-1]
-        if W % self.cameras:
-            raise ValueError(f"DeadCamera expects a panorama of {self.cameras} cameras; {W} columns do not split")
+        B, N = img.shape[0], img.shape[1]
         dead = world.episode_draw(k, lambda gen: torch.randint(self.cameras, (B, N), generator=gen))
-        w = W // self.cameras
-        column_camera = torch.arange(W, device=img.device) // w                  # (W,)
-        black = column_camera == dead.to(img.device)[..., None]                  # (B, N, W)
-        return img.masked_fill(black[:, :, None, None, :], 0.0)
+        return dead_camera(img, dead)
 
     def __repr__(self):
         return "DeadCamera()"
