@@ -34,7 +34,7 @@ import torch
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from vgai_lite import FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
+from vgai_lite import CameraRanges, FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
@@ -52,6 +52,10 @@ def main(argv=None) -> int:
     p.add_argument("--dagger-rounds", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--learner-swarms", type=float, default=None, help="share of DAgger swarms the learner flies alone")
+    p.add_argument("--camera", default=None, metavar="NOISE:BLUR:GAIN:OFFSET:DEAD",
+                   help="the training's cameras (VGAITrainConfig.camera, drawn per flight and window): ranges "
+                        "lo,hi of sensor noise sigma, lens blur (degrees), gain and offset, then the share of "
+                        "drones with a dead camera, e.g. 0,0.08:0,1.5:0.8,1.2:-0.05,0.05:0.1")
     p.add_argument("--channels", default=None,
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
@@ -68,6 +72,13 @@ def main(argv=None) -> int:
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
     cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
+    if args.camera is not None:
+        parts = args.camera.split(":")
+        if len(parts) != 5:
+            raise SystemExit(f"--camera takes NOISE:BLUR:GAIN:OFFSET:DEAD, got {args.camera!r}")
+        ranges = [tuple(float(x) for x in part.split(",")) for part in parts[:4]]
+        tcfg = dataclasses.replace(tcfg, camera=CameraRanges(*ranges, dead_share=float(parts[4])))
+        changes["camera"] = tcfg.camera.to_dict()
     if args.channels is not None:  # a change inside the vision configuration: recorded by name
         channels = tuple(args.channels.split(","))
         render = dataclasses.replace(tcfg.vision.render, channels=channels)

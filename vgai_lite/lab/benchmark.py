@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 import torch
+from torch.utils.benchmark import Timer as TorchTimer
 
 from ..config import FlockConfig
 from ..controllers import expert_control
@@ -43,14 +44,11 @@ def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
 
 
 def _time(fn, min_seconds: float) -> tuple[int, float]:
-    fn()  # warm-up
-    n, start = 0, time.perf_counter()
-    while True:
-        fn()
-        n += 1
-        elapsed = time.perf_counter() - start
-        if elapsed >= min_seconds:
-            return n, elapsed
+    """(calls, seconds) of ``fn`` run for at least ``min_seconds`` after a warm-up
+    (``torch.utils.benchmark``, at the threads torch uses now)."""
+    m = TorchTimer("fn()", globals={"fn": fn}, num_threads=torch.get_num_threads()).blocked_autorange(
+        min_run_time=min_seconds)
+    return len(m.raw_times) * m.number_per_run, sum(m.raw_times) * m.number_per_run
 
 
 def run(N: int = 50, batches=(1, 256), steps: int = 20, min_seconds: float = 2.0,

@@ -36,7 +36,7 @@ from typing import Optional
 import torch
 
 from ..aggregation import AggregationBuffer
-from ..camera import dead_camera, gaussian_blur, sensor_noise
+from ..camera import blur_degrees, dead_camera, gaussian_blur, sensor_noise
 from ..flocking import check_state
 from ..graphs import adjacency, gso
 
@@ -91,6 +91,21 @@ class Blur(Perturbation):
 
     def __repr__(self):
         return f"Blur(sigma={self.sigma:g} px)"
+
+
+class LensBlur(Perturbation):
+    """The lens's Gaussian blur of ``sigma_deg`` degrees of view (``camera.blur_degrees``) on the
+    cameras ``render`` describes: the same setting means the same at every resolution."""
+
+    def __init__(self, sigma_deg: float, render):
+        self.sigma_deg = _check(sigma_deg, "LensBlur sigma (degrees of view)", 0.0, 45.0)
+        self.render = render
+
+    def frame(self, img, t, world, k):
+        return blur_degrees(img, self.sigma_deg, self.render)
+
+    def __repr__(self):
+        return f"LensBlur({self.sigma_deg:g}°)"
 
 
 class DeadCamera(Perturbation):
