@@ -615,3 +615,69 @@ def test_06_2_passes_correct_answers(answer):
 ])
 def test_06_2_rejects_wrong_answers(answer, why):
     assert not any(passes(check_odd_part, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# Every check: the library's own implementation of what the exercise asks for does not count,
+# however it is reached; other library functions stay allowed.
+
+def _library_answers():
+    from types import SimpleNamespace
+
+    import vgai_lite
+    import vgai_lite as vl
+    import vgai_lite.graphs
+    from vgai_lite import FlockConfig
+    from vgai_lite.controllers import potential_gradient
+    from vgai_lite.features import local_features
+    from vgai_lite.flocking import flocking_cost, velocity_variance
+    from vgai_lite.graphs import gso as my_gso  # an alias
+    from vgai_lite.imitation import dagger_mix
+    from vgai_lite.lab.exercises import (check_flocking_cost, check_local_features, check_pinhole,
+                                         check_potential_gradient)
+    from vgai_lite.models import ResidualBlock
+    from vgai_lite.render import bearing_to_column
+    from vgai_lite.vgai_training import bptt_loss
+
+    class Block(ResidualBlock):  # the library's block, subclassed
+        def __init__(self, c_in, c_out, pool):
+            super().__init__(c_in, c_out, (3, 3), pool=pool)
+
+    return [
+        ("01.1", check_potential_gradient, lambda r, rho: potential_gradient(r, FlockConfig(rho=rho))),
+        ("01.2", check_flocking_cost, lambda v: flocking_cost(v)),
+        ("01.2", check_flocking_cost, lambda v: velocity_variance(v).sum(0)),
+        ("02.1", check_aggregation_sequence, lambda X, S, K: vl.aggregation_sequence(X[None], S[None], K)[0, -1]),
+        ("02.2", check_sym_gso, lambda A: my_gso(A, "sym_normalized")),
+        ("02.2", check_sym_gso, lambda A: vl.gso(A, "sym_normalized")),
+        ("02.2", check_sym_gso, lambda A: vgai_lite.graphs.gso(A, "sym_normalized")),
+        ("03.1", check_local_features, lambda r, v, R: local_features(r[None], v[None], R)[0]),
+        ("04.1", check_pinhole, lambda theta, d, rcfg: (bearing_to_column(theta, rcfg), rcfg.view_height / d)),
+        ("05.1", check_residual_block, Block),
+        ("06.1", check_dagger_mix, lambda u_l, u_e, p, g: dagger_mix(u_l, u_e, p, g)),
+        ("06.3", check_bptt_loss, lambda cnn, mlp, images, S, u: bptt_loss(SimpleNamespace(cnn=cnn, mlp=mlp), images, S, u)),
+        ("07.1", check_variance_at, lambda v, Ts, seconds: velocity_variance(v)[round(seconds / Ts)]),
+    ]
+
+
+@pytest.mark.parametrize("case", range(13))
+def test_an_answer_that_calls_the_librarys_own_implementation_is_told_so(case):
+    exercise, check, answer = _library_answers()[case]
+    result = check(answer)
+    assert not result and "library's own" in result.message, (exercise, result.message)
+
+
+def test_the_library_works_again_after_a_check_and_other_library_functions_stay_allowed():
+    from vgai_lite.aggregation import aggregation_sequence as lib_z
+    from vgai_lite.graphs import gso
+
+    check_sym_gso(lambda A: gso(A, "sym_normalized"))  # forbidden during the answer only
+    A = torch.ones(1, 3, 3) - torch.eye(3)
+    torch.testing.assert_close(gso(A, "sym_normalized"), A / 2)
+    # 06.3 may build Z with the library's aggregation_sequence: that is not what it asks for
+    def bptt_with_library_z(cnn, mlp, images, S, u_star):
+        M, K, N = images.shape[:3]
+        X = cnn(images.flatten(0, 2)).view(M, K, N, -1)
+        return nnf.l1_loss(mlp(lib_z(X, S, K)[:, -1]), u_star)
+
+    assert all(passes(check_bptt_loss, bptt_with_library_z))

@@ -17,11 +17,11 @@ from typing import Callable
 
 import torch
 
-from ..aggregation import aggregation_sequence
+from ..aggregation import AggregationBuffer, aggregation_sequence
 from ..config import FlockConfig
-from ..controllers import potential_gradient
+from ..controllers import potential_gradient, repulsion_weight
 from ..features import local_features
-from ..flocking import flocking_cost
+from ..flocking import flocking_cost, velocity_variance
 from ..graphs import adjacency, gso
 from ..render import RenderConfig, bearing_to_column
 
@@ -116,9 +116,62 @@ def score(notebook: str) -> None:
     print(f"Score for notebook {notebook}: {total}/{len(ids)}")
 
 
+LIBRARY_CALL = "vgai-lite library call: "
+"""The message of the error a library function raises while it is forbidden (``without_library``)."""
+
+
+def _forbidden_code(func: Callable):
+    """A code object that raises, naming ``func``, whatever it is called with (no free variables, builtins
+    only, so that it can stand in ``func.__code__`` inside ``func``'s own module)."""
+    qualified = f"{func.__module__}.{func.__qualname__}"
+    free = func.__code__.co_freevars  # e.g. __class__ of a method that calls super(): as many, as the slot needs
+    source = ("def outer():\n" + "".join(f"    {v} = None\n" for v in free)
+              + f"    def {func.__name__}(*args, **kwargs):\n"
+              + (f"        {', '.join(free)}\n" if free else "")
+              + f"        raise PermissionError({LIBRARY_CALL + qualified!r})\n"
+              + f"    return {func.__name__}\n")
+    namespace: dict = {}
+    exec(source, namespace)
+    return namespace["outer"]().__code__
+
+
+class without_library:
+    """While active, the library's own implementations ``funcs`` raise when called, however they are
+    reached (under an alias, as ``vl.name`` or ``module.name``, from a subclass): the very function
+    objects are changed, not the names. The checks run the student's answer inside it, so that an
+    answer that calls what the exercise asks to write is told so; every other library function works."""
+
+    def __init__(self, *funcs: Callable):
+        self.funcs = funcs
+
+    def __enter__(self):
+        self.saved = [(f, f.__code__) for f in self.funcs]
+        for f in self.funcs:
+            f.__code__ = _forbidden_code(f)
+        return self
+
+    def __exit__(self, *exc):
+        for f, code in self.saved:
+            f.__code__ = code
+
+
+def guarded(student_fn: Callable, *library: Callable) -> Callable:
+    """``student_fn`` run ``without_library(*library)`` at every call."""
+    def call(*args, **kwargs):
+        with without_library(*library):
+            return student_fn(*args, **kwargs)
+    return call
+
+
 def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
     try:
         passed, message = body()
+    except PermissionError as exc:
+        if not str(exc).startswith(LIBRARY_CALL):
+            raise
+        name = str(exc)[len(LIBRARY_CALL):]
+        passed, message = False, (f"your answer calls the library's own `{name}`, the very thing this exercise "
+                                  "asks you to write: write it from the equation (other library functions are allowed).")
     except NotImplementedError:
         passed, message = False, "not implemented yet: replace the `raise NotImplementedError` with your code."
     except AnswerMismatch as exc:  # the check's own test failed: say what was expected
@@ -147,6 +200,7 @@ def check_potential_gradient(student_fn: Callable) -> CheckResult:
 
     U is the paper's potential (eq. 3): 1/||r||^2 - log ||r||^2 inside rho, constant outside.
     """
+    student_fn = guarded(student_fn, potential_gradient, repulsion_weight)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         # rho <= 0.8 and distances on a jittered grid from 0.1 rho to 1.5 rho: every run has offsets
@@ -178,6 +232,7 @@ def check_potential_gradient(student_fn: Callable) -> CheckResult:
 
 def check_flocking_cost(student_fn: Callable) -> CheckResult:
     """Exercise 01.2: ``student_fn(v) -> cost`` for velocities (T, B, N, 2), returning (B,) (eq. 1)."""
+    student_fn = guarded(student_fn, flocking_cost, velocity_variance)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         T, B, N = (int(x) for x in torch.randint(2, 12, (3,), generator=g))
@@ -213,6 +268,7 @@ def check_aggregation_sequence(student_fn: Callable) -> CheckResult:
     X (T, N, F) features and S (T, N, N) GSOs at times 0 ... T-1 of one swarm (nothing before 0);
     return Z(T-1) of shape (N, K, F): block k = S(t) S(t-1) ... S(t-k+1) X(t-k) (eq. 6).
     """
+    student_fn = guarded(student_fn, aggregation_sequence, AggregationBuffer.push)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         # two windows: one longer than K, one shorter (K > T: blocks from before t = 0 must be zero)
@@ -265,6 +321,7 @@ def _one_aggregation_window(student_fn, g, short: bool):
 def check_local_features(student_fn: Callable) -> CheckResult:
     """Exercise 03.1: ``student_fn(r, v, R) -> X`` with r, v (N, 2): the 6 local features (N, 6),
     ordered [sum (v_i - v_j), sum r_ij/|r_ij|^4, sum r_ij/|r_ij|^2] over neighbours within R."""
+    student_fn = guarded(student_fn, local_features)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         R = 1.2 + 0.8 * torch.rand(1, generator=g, dtype=torch.float64).item()
@@ -309,6 +366,7 @@ def check_pinhole(student_fn: Callable) -> CheckResult:
     """Exercise 04.1: ``student_fn(theta, d, rcfg) -> (u, height)`` for a drone at bearing ``theta``
     (radians, CCW from +x) and centre distance ``d`` (m): the continuous panorama column u of its
     bearing and its apparent height in rows, 2 f_v (h/2) / (d - body_radius)."""
+    student_fn = guarded(student_fn, bearing_to_column)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         rcfg = RenderConfig(view_width=int(torch.randint(8, 64, (1,), generator=g)) * 2,

@@ -16,7 +16,7 @@ from typing import Callable
 import torch
 
 from ..flocking import velocity_variance
-from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
+from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run, guarded
 
 
 def check_circular_conv(student_cls: Callable) -> CheckResult:
@@ -98,6 +98,7 @@ def check_variance_at(student_fn: Callable) -> CheckResult:
     """Exercise 07.1: ``student_fn(v, Ts, seconds) -> (B,)``: the velocity variance
     (1/N) sum_i ||v_i - vbar||^2 (eq. 1's summand) of each flight at time ``seconds``, the step
     round(seconds / Ts) of velocities v (T, B, N, 2)."""
+    student_fn = guarded(student_fn, velocity_variance)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         T, B, N = int(torch.randint(60, 120, (1,), generator=g)), 3, int(torch.randint(3, 9, (1,), generator=g))

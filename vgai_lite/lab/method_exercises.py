@@ -17,10 +17,12 @@ import torch.nn.functional as nnf
 from torch import nn
 
 from ..aggregation import aggregation_sequence
-from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
+from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run, guarded
 from ..graphs import gso
-from ..imitation import dagger_mix
-from ..vgai_training import bptt_loss
+from ..dagnn_training import collect
+from ..imitation import EpisodeStore, dagger_mix, fly_dagger
+from ..models import ResidualBlock
+from ..vgai_training import bptt_loss, window_action_loss
 
 
 # ---------------------------------------------------------------------------------------------
@@ -41,6 +43,7 @@ def check_sym_gso(student_fn: Callable) -> CheckResult:
     """Exercise 02.2: ``student_fn(A) -> S`` for adjacencies A (B, N, N): the symmetric normalised
     graph shift operator S = D^-1/2 A D^-1/2, D = diag(degrees), an isolated drone's row and
     column zero (its degree 0 must not give 0/0)."""
+    student_fn = guarded(student_fn, gso)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         B, N = int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(6, 14, (1,), generator=g))
@@ -98,6 +101,7 @@ def check_dagger_round(student_fn: Callable) -> CheckResult:
     and label it with the expert's action u* = expert(r, v), then apply
     mix(learner(r, v), u*) (DAgger's coin: the learner flies with probability p) through
     ``step(r, v, u) -> (r, v)``. Return the data of every round: the old entries first, then the new."""
+    student_fn = guarded(student_fn, fly_dagger, EpisodeStore.fly, collect)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         B, N, steps, p = 3, int(torch.randint(3, 7, (1,), generator=g)), int(torch.randint(6, 12, (1,), generator=g)), 0.5
@@ -257,7 +261,8 @@ def check_residual_block(student_cls: Callable) -> CheckResult:
         return True, ("right shapes, rows pooled by averaging, columns kept, two 3x3 convolutions' reach, "
                       "and the skip connection carries the input.")
 
-    return _run("05.1", body)
+    # the library's own block does not count, built or subclassed
+    return _run("05.1", guarded(body, ResidualBlock.__init__, ResidualBlock.forward))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -282,6 +287,7 @@ def check_dagger_mix(student_fn: Callable) -> CheckResult:
     """Exercise 06.1: ``student_fn(u_learner, u_expert, p, generator) -> u`` applies, for each swarm
     (the first axis), the learner's actions with probability p and the expert's otherwise (DAgger's
     mixing rule, paper: p = 0.33), its coins drawn from ``generator``. u_learner, u_expert: (B, N, 2)."""
+    student_fn = guarded(student_fn, dagger_mix)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         B, N = 4000, 5
@@ -322,6 +328,7 @@ def check_bptt_loss(student_fn: Callable) -> CheckResult:
     Run the CNN on all K steps' inputs, build Z at the last step (eq. 6), act once with ``mlp``
     ((M, N, K, F) -> (M, N, 2)), and return the L1 loss (eq. 10, the mean over windows, agents and
     both components), differentiable down to the CNN at every step."""
+    student_fn = guarded(student_fn, bptt_loss, window_action_loss)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         M, K, N, D, F = 3, int(torch.randint(3, 6, (1,), generator=g)), int(torch.randint(6, 10, (1,), generator=g)), 5, 3
