@@ -178,3 +178,16 @@ def test_grader_rejects_what_it_cannot_grade(tmp_path):
     nbformat.write(nbformat.v4.new_notebook(), odd)
     with pytest.raises(ValueError, match="NN_"):
         grade_notebook(odd)
+
+
+def test_the_books_hints_name_the_idea_or_the_mistake_never_the_code():
+    """A hint survives into the student copy: one sentence, no call, no indexing, no assignment."""
+    import re
+
+    hints = [(src.name, line.strip()[len("# HINT:"):].strip())
+             for src in sorted((ROOT / "tools" / "notebooks").glob("*.py"))
+             for line in src.read_text().splitlines() if line.strip().startswith("# HINT:")]
+    assert len(hints) >= 10
+    for name, hint in hints:
+        assert len(hint) <= 160 and not re.search(r"[.;] [A-Z]", hint), (name, hint)  # one sentence
+        assert not re.search(r"torch\.|nn\.|\w\(|=|\[|dim|\.sum|\.mean", hint), (name, hint)

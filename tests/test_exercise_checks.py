@@ -4,6 +4,8 @@ case runs several times."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import math
 
 import pytest
@@ -346,7 +348,7 @@ def test_03_2_rejects_wrong_answers(kwargs, why):
 
 
 # ---------------------------------------------------------------------------------------------
-# 06.3: the K-step BPTT loss
+# 06.2: the K-step BPTT loss
 
 def bptt_right(cnn, mlp, images, S, u_star, detach_past=False, loss="l1", reduce="mean", power=False):
     M, K, N, D = images.shape
@@ -383,7 +385,7 @@ def bptt_loop_float32(cnn, mlp, images, S, u_star):
 
 
 @pytest.mark.parametrize("answer", [bptt_right, bptt_loop_float32])
-def test_06_3_passes_correct_answers(answer):
+def test_06_2_passes_correct_answers(answer):
     assert all(passes(check_bptt_loss, answer))
 
 
@@ -393,11 +395,11 @@ def test_06_3_passes_correct_answers(answer):
     (dict(reduce="sum"), "sum instead of mean"),
     (dict(power=True), "S(t)^k"),
 ])
-def test_06_3_rejects_wrong_answers(kwargs, why):
+def test_06_2_rejects_wrong_answers(kwargs, why):
     assert not any(passes(check_bptt_loss, lambda *a: bptt_right(*a, **kwargs))), why
 
 
-def test_06_3_rejects_a_loss_without_gradient():
+def test_06_2_rejects_a_loss_without_gradient():
     assert not any(passes(check_bptt_loss, lambda *a: bptt_right(*a).detach()))
 
 
@@ -580,7 +582,7 @@ def test_04_1_rejects_wrong_answers(answer, why):
 
 
 # ---------------------------------------------------------------------------------------------
-# 06.2: the odd part
+# 06.3: the odd part
 
 def odd_sign_vector(f, images):
     """Correct, another way: mirror with a per-channel sign."""
@@ -602,7 +604,7 @@ def odd_part(f, images, half="second"):
 
 
 @pytest.mark.parametrize("answer", [odd_part, odd_sign_vector])
-def test_06_2_passes_correct_answers(answer):
+def test_06_3_passes_correct_answers(answer):
     assert all(passes(check_odd_part, answer))
 
 
@@ -613,7 +615,7 @@ def test_06_2_passes_correct_answers(answer):
     (lambda f, im: f(im) - f(torch.cat((im[:, :im.shape[1] // 2], -im[:, im.shape[1] // 2:]), 1)), "no 1/2"),
     (lambda f, im: (f(im) + f(torch.cat((im[:, :im.shape[1] // 2], -im[:, im.shape[1] // 2:]), 1))) / 2, "even part"),
 ])
-def test_06_2_rejects_wrong_answers(answer, why):
+def test_06_3_rejects_wrong_answers(answer, why):
     assert not any(passes(check_odd_part, answer)), why
 
 
@@ -655,7 +657,7 @@ def _library_answers():
         ("04.1", check_pinhole, lambda theta, d, rcfg: (bearing_to_column(theta, rcfg), rcfg.view_height / d)),
         ("05.1", check_residual_block, Block),
         ("06.1", check_dagger_mix, lambda u_l, u_e, p, g: dagger_mix(u_l, u_e, p, g)),
-        ("06.3", check_bptt_loss, lambda cnn, mlp, images, S, u: bptt_loss(SimpleNamespace(cnn=cnn, mlp=mlp), images, S, u)),
+        ("06.2", check_bptt_loss, lambda cnn, mlp, images, S, u: bptt_loss(SimpleNamespace(cnn=cnn, mlp=mlp), images, S, u)),
         ("07.1", check_variance_at, lambda v, Ts, seconds: velocity_variance(v)[round(seconds / Ts)]),
     ]
 
@@ -674,10 +676,57 @@ def test_the_library_works_again_after_a_check_and_other_library_functions_stay_
     check_sym_gso(lambda A: gso(A, "sym_normalized"))  # forbidden during the answer only
     A = torch.ones(1, 3, 3) - torch.eye(3)
     torch.testing.assert_close(gso(A, "sym_normalized"), A / 2)
-    # 06.3 may build Z with the library's aggregation_sequence: that is not what it asks for
+    # 06.2 may build Z with the library's aggregation_sequence: that is not what it asks for
     def bptt_with_library_z(cnn, mlp, images, S, u_star):
         M, K, N = images.shape[:3]
         X = cnn(images.flatten(0, 2)).view(M, K, N, -1)
         return nnf.l1_loss(mlp(lib_z(X, S, K)[:, -1]), u_star)
 
     assert all(passes(check_bptt_loss, bptt_with_library_z))
+
+
+# ---------------------------------------------------------------------------------------------
+# 05.3: the state-estimation loss
+
+def est_right(X, head, x, mean, std):
+    return nnf.l1_loss(head(X), (x - mean) / std)
+
+
+def est_loop_float32(X, head, x, mean, std):
+    """Correct, written another way: per feature, in float32."""
+    pred = head(X).float()
+    target = ((x - mean) / std).float()
+    return torch.stack([(pred[:, k] - target[:, k]).abs().mean() for k in range(6)]).mean()
+
+
+@pytest.mark.parametrize("answer", [est_right, est_loop_float32])
+def test_05_3_passes_correct_answers(answer):
+    from vgai_lite.lab.method_exercises import check_estimation_loss
+
+    assert all(passes(check_estimation_loss, answer))
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda X, h, x, m, s: nnf.l1_loss(h(X), x), "raw features"),
+    (lambda X, h, x, m, s: nnf.l1_loss(h(X) * s + m, x), "un-standardised prediction"),
+    (lambda X, h, x, m, s: nnf.mse_loss(h(X), (x - m) / s), "squared error"),
+    (lambda X, h, x, m, s: (h(X) - (x - m) / s).abs().sum(), "sum"),
+    (lambda X, h, x, m, s: nnf.l1_loss(h(X.detach()), (x - m) / s), "detached features"),
+    (lambda X, h, x, m, s: nnf.l1_loss(h(X), (x - m) / s.mean()), "one spread for all"),
+])
+def test_05_3_rejects_wrong_answers(answer, why):
+    from vgai_lite.lab.method_exercises import check_estimation_loss
+
+    assert not any(passes(check_estimation_loss, answer)), why
+
+
+def test_05_3_rejects_the_librarys_loss():
+    from vgai_lite.lab.method_exercises import check_estimation_loss
+    from vgai_lite.vgai_training import estimation_loss
+
+    def via_library(X, head, x, mean, std):
+        cnn = SimpleNamespace(aux_standardized=head, aux_mean=mean, aux_std=std, F=X.shape[-1])
+        return estimation_loss(cnn, X, x)
+
+    result = check_estimation_loss(via_library)
+    assert not result and "library's own" in result.message

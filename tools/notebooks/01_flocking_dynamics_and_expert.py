@@ -419,7 +419,7 @@ display(Markdown("| rho [m] | expert cost | Local cost | Local / Centralized | L
 
 def my_potential_gradient(r_ij, rho):
     ### BEGIN SOLUTION
-    # HINT: work with d2 = ||r_ij||^2 (sum over the last axis, keepdim); grad of 1/d2 is -2 r/d2^2, of log d2 is 2 r/d2; zero where d2 > rho^2
+    # HINT: differentiate through the squared distance by the chain rule, and remember that U is constant beyond rho.
     d2 = (r_ij ** 2).sum(dim=-1, keepdim=True)
     grad = -2 * r_ij / d2 ** 2 - 2 * r_ij / d2
     return torch.where(d2 <= rho ** 2, grad, torch.zeros_like(grad))
@@ -437,7 +437,7 @@ assert check_potential_gradient(my_potential_gradient)
 # %% [solution ex01-2]
 def my_flocking_cost(v):
     ### BEGIN SOLUTION
-    # HINT: subtract the swarm's mean velocity (mean over agents, dim=2), square, sum x and y, average over agents, sum over time
+    # HINT: eq. 1 sums over the steps how far, on average over the agents, each velocity is from the swarm's mean velocity.
     vbar = v.mean(dim=2, keepdim=True)
     return ((v - vbar) ** 2).sum(dim=-1).mean(dim=2).sum(dim=0)
     ### END SOLUTION

@@ -17,8 +17,9 @@
 # shift operators; show that S X needs one exchange with one-hop neighbours; say which information the
 # delayed aggregation sequence holds, and how late.
 #
-# **You implement** the delayed aggregation sequence Z(t) of eq. 6 (exercise 02.1); an automatic check
-# tells you at once whether it is right, and the last cell gives your score.
+# **You implement** the delayed aggregation sequence Z(t) of eq. 6 (exercise 02.1) and the symmetric
+# normalised GSO (exercise 02.2); an automatic check tells you at once whether each is right, and the
+# last cell gives your score.
 
 # %%
 import matplotlib.pyplot as plt
@@ -215,7 +216,7 @@ display(Markdown("| F | exchanges K-1 | bytes per agent per step | kB/s at 100 H
 # %% [solution ex02-1]
 def my_aggregation_sequence(X, S, K):
     ### BEGIN SOLUTION
-    # HINT: block k starts from X[t - k] and is multiplied by S[t-k+1], ..., S[t] in that order (zeros if t - k < 0); torch.stack(blocks, dim=1)
+    # HINT: what an agent hears k exchanges late is k steps old, and it travelled through every graph since, the oldest first.
     T = X.shape[0]
     t = T - 1
     blocks = []
@@ -248,7 +249,7 @@ assert check_aggregation_sequence(my_aggregation_sequence)
 # %% [solution ex02-2]
 def my_sym_gso(A):
     ### BEGIN SOLUTION
-    # HINT: degrees d = A.sum(-1); 1/sqrt(d) where d > 0 and 0 where d = 0; scale the rows and the columns
+    # HINT: an isolated agent has degree 0: decide what 1/√d means there before you divide.
     d = A.sum(dim=-1)
     inv_sqrt = torch.where(d > 0, d.clamp(min=1).rsqrt(), torch.zeros_like(d))
     return inv_sqrt[..., :, None] * A * inv_sqrt[..., None, :]

@@ -18,8 +18,9 @@
 # aggregation MLP; train it by imitation with DAgger; read the effect of the number of exchanges K-1
 # and of the GSO on the relative cost.
 #
-# **You implement** the six local features a drone measures from its neighbours (exercise 03.1); an
-# automatic check tells you at once whether it is right, and the last cell gives your score.
+# **You implement** the six local features a drone measures from its neighbours (exercise 03.1) and
+# one DAgger round's data aggregation (exercise 03.2); an automatic check tells you at once whether
+# each is right, and the last cell gives your score.
 
 # %%
 import time
@@ -366,7 +367,7 @@ display(Markdown(f"| alignment gain | repulsion | relative cost | median closest
 # %% [solution ex03-1]
 def my_local_features(r, v, R):
     ### BEGIN SOLUTION
-    # HINT: r_ij = r[:, None] - r[None, :] gives all offsets at once; mask the neighbours (d^2 <= R^2, not i itself) before dividing
+    # HINT: only the neighbours within R count, and an agent is not its own neighbour.
     r_ij = r[:, None, :] - r[None, :, :]                    # (N, N, 2): r_i - r_j
     v_ij = v[:, None, :] - v[None, :, :]
     d2 = (r_ij ** 2).sum(-1)
@@ -396,7 +397,7 @@ assert check_local_features(my_local_features)
 # %% [solution ex03-2]
 def my_dagger_round(data, learner, expert, mix, step, r0, v0, steps):
     ### BEGIN SOLUTION
-    # HINT: record (r, v) before stepping; the label is expert(r, v) whoever flies; append to the old lists, do not start new ones
+    # HINT: whoever flies, the label is the expert's action at the state visited, and DAgger keeps every earlier round's data.
     r, v = r0, v0
     for _ in range(steps):
         u_star = expert(r, v)

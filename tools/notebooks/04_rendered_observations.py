@@ -315,7 +315,7 @@ print(f"apparent height = 2 × {rcfg.focal_vertical:.1f} × {rcfg.body_height / 
 # %% [solution ex04-1]
 def my_pinhole(theta, d, rcfg):
     ### BEGIN SOLUTION
-    # HINT: the four cameras each cover 90 degrees; find which camera sees theta, the angle phi from its axis, then u = camera offset + view_width/2 + focal * tan(phi)
+    # HINT: first find which of the four 90° cameras sees the bearing; the column follows from the angle off that camera's axis.
     psi = (math.pi / 4 - theta) % (2 * math.pi)  # clockwise from the front camera's left edge
     cam = min(int(psi // (math.pi / 2)), 3)
     phi = psi - cam * math.pi / 2 - math.pi / 4  # angle to the right of camera cam's axis

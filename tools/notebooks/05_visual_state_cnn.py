@@ -16,8 +16,10 @@
 # architecture and cost; say why it pools along the vertical axis only; show what one frame and two
 # frames can tell about neighbours.
 #
-# **You implement** a residual block with vertical-only pooling (exercise 05.1); an automatic check
-# tells you at once whether it is right, and the last cell gives your score.
+# **You implement** a residual block with vertical-only pooling (exercise 05.1) and the
+# state-estimation loss of stage 1 (exercise 05.3), and run an open-ended experiment with a
+# convolution that wraps around the panorama (exercise 05.2); an automatic check tells you at once
+# whether your code is right, and the last cell gives your score.
 
 # %%
 import time
@@ -249,7 +251,7 @@ class MyResidualBlock(nn.Module):
     def __init__(self, c_in, c_out, pool):
         super().__init__()
         ### BEGIN SOLUTION
-        # HINT: nn.Conv2d(c_in, c_out, 3, padding=1) keeps H and W; nn.AvgPool2d((pool, 1)) averages rows only
+        # HINT: pool the rows only: the columns are bearings, and the CNN must keep every one.
         self.conv1 = nn.Conv2d(c_in, c_out, 3, padding=1)
         self.conv2 = nn.Conv2d(c_out, c_out, 3, padding=1)
         self.skip = nn.Conv2d(c_in, c_out, 1) if c_in != c_out else nn.Identity()
@@ -258,7 +260,7 @@ class MyResidualBlock(nn.Module):
 
     def forward(self, x):
         ### BEGIN SOLUTION
-        # HINT: conv, ReLU, conv, add the skip path, ReLU, then pool
+        # HINT: the skip path joins before the last ReLU, and the pooling comes last.
         y = self.conv2(torch.relu(self.conv1(x)))
         return self.pool(torch.relu(y + self.skip(x)))
         ### END SOLUTION
@@ -285,13 +287,12 @@ class MyCircularConv(nn.Module):
     def __init__(self, c_in, c_out):
         super().__init__()
         ### BEGIN SOLUTION
-        # HINT: nn.Conv2d takes padding_mode="circular"; pad one column on each side and no rows
+        # HINT: the panorama's first and last columns are neighbours; its top and bottom rows are not.
         self.conv = nn.Conv2d(c_in, c_out, (1, 3), padding=(0, 1), padding_mode="circular")
         ### END SOLUTION
 
     def forward(self, x):
         ### BEGIN SOLUTION
-        # HINT: apply the convolution
         return self.conv(x)
         ### END SOLUTION
 
@@ -368,6 +369,34 @@ else:
 # variant over a few seeds (and at the full length of stage 1) and switches only if circular
 # padding is better on average by more than the spread between seeds. It costs nothing at run time
 # (the same convolutions, padded differently), so a switch needs only that evidence.
+
+# %% [markdown]
+# ## 7. Exercise 05.3: the state-estimation loss
+#
+# Stage 1 teaches the CNN to see: a linear head reads its features X and is scored against the six
+# exact local features of each agent. Those features have very different sizes (a repulsion sum
+# reaches hundreds, a velocity difference a few metres per second), so the head reads them
+# *standardised*, each minus its mean over the training flights and divided by its spread. Write
+# `my_estimation_loss(X, head, x_exact, mean, std)`: X (M, F), the head F → 6, x_exact (M, 6),
+# mean and std (6,); return the L1 loss in standardised units, the mean over agents and features,
+# differentiable down to X (the CNN learns through it). The library's `estimation_loss` is this loss;
+# the check runs your function on random features of very different sizes.
+
+# %% [solution ex05-3]
+import torch.nn.functional as nnf
+
+
+def my_estimation_loss(X, head, x_exact, mean, std):
+    ### BEGIN SOLUTION
+    # HINT: compare in the units the head reads, so that no feature drowns the others by its size alone.
+    return nnf.l1_loss(head(X), (x_exact - mean) / std)
+    ### END SOLUTION
+
+
+# %% [check ex05-3]
+from vgai_lite.lab.method_exercises import check_estimation_loss
+
+assert check_estimation_loss(my_estimation_loss)
 
 # %% [markdown]
 # ## Key takeaways

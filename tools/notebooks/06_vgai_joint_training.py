@@ -21,8 +21,8 @@
 # flock, and what each of the book's four changes to the paper's recipe buys (a symmetry built
 # into the CNN, and a learner allowed to drift among them).
 #
-# **You implement** DAgger's mixing rule (exercise 06.1) and the K-step BPTT loss (exercise 06.3), and
-# run an open-ended experiment (exercise 06.2); an automatic check tells you at once whether your code is right,
+# **You implement** DAgger's mixing rule (exercise 06.1) and the K-step BPTT loss (exercise 06.2), and
+# run an open-ended experiment (exercise 06.3); an automatic check tells you at once whether your code is right,
 # and the last cell gives your score.
 
 # %%
@@ -67,7 +67,7 @@ plt.show()
 
 # %% [markdown]
 # The library's version is `bptt_loss` in `vgai_lite/vgai_training.py`; you will write the loss
-# yourself in exercise 06.3, at the end of this notebook.
+# yourself in exercise 06.2, at the end of this notebook.
 
 # %% [markdown]
 # ## 2. Training in three stages
@@ -508,7 +508,7 @@ prose("{verdict}", verdict=(
 # %% [solution ex06-1]
 def my_dagger_mix(u_learner, u_expert, p, generator):
     ### BEGIN SOLUTION
-    # HINT: one torch.rand(B, generator=generator) < p per swarm, then torch.where with the coin broadcast to (B, N, 2)
+    # HINT: one coin per swarm and step, drawn from the generator given, not from torch's global state.
     follow = torch.rand(u_learner.shape[0], generator=generator) < p
     return torch.where(follow[:, None, None], u_learner, u_expert)
     ### END SOLUTION
@@ -519,7 +519,7 @@ from vgai_lite.lab.method_exercises import check_dagger_mix
 assert check_dagger_mix(my_dagger_mix)
 
 # %% [markdown]
-# ## 8. Exercise 06.3: the K-step BPTT loss
+# ## 8. Exercise 06.2: the K-step BPTT loss
 #
 # Write the loss of one joint step (section 1, the paper's figure 3) for `M` windows of `K` steps:
 # `images` of shape `(M, K, N, D)` holds every agent's input at the window's `K` steps, oldest first
@@ -531,10 +531,10 @@ assert check_dagger_mix(my_dagger_mix)
 # windows, agents and both components). Calling `backward()` on it must reach the CNN at every step
 # of the window: that is the "K-step" in K-step BPTT.
 
-# %% [solution ex06-3]
+# %% [solution ex06-2]
 def my_bptt_loss(cnn, mlp, images, S, u_star):
     ### BEGIN SOLUTION
-    # HINT: X = cnn(images.reshape(-1, D)).view(M, K, N, F); block k: X[:, K-1-k] multiplied by S[:, K-k], ..., S[:, K-1]; torch.nn.functional.l1_loss
+    # HINT: the MLP acts once, at the window's last step, yet the loss must reach the CNN at every step of the window.
     M, K, N, D = images.shape
     X = cnn(images.reshape(-1, D)).view(M, K, N, -1)
     blocks = []
@@ -547,29 +547,29 @@ def my_bptt_loss(cnn, mlp, images, S, u_star):
     return torch.nn.functional.l1_loss(mlp(Z), u_star)
     ### END SOLUTION
 
-# %% [check ex06-3]
+# %% [check ex06-2]
 from vgai_lite.lab.method_exercises import check_bptt_loss
 
 assert check_bptt_loss(my_bptt_loss)
 
 # %% [markdown]
-# ## 9. Exercise 06.2, an open-ended experiment: make any estimator odd
+# ## 9. Exercise 06.3, an open-ended experiment: make any estimator odd
 #
 # Section 6's cure made the CNN's velocity features *odd* in the motion channels $D$: the odd part of
 # any function $f$ of the images is $\frac12\left(f([\mathbf I, D]) - f([\mathbf I, -D])\right)$, exactly 0
 # when nothing moves. Write `my_odd_part(f, images)` for images `(M, C, H, W)` whose second half of
 # channels is $D$.
 
-# %% [solution ex06-2]
+# %% [solution ex06-3]
 def my_odd_part(f, images):
     ### BEGIN SOLUTION
-    # HINT: negate the second half of the channels, evaluate f on both, take half the difference
+    # HINT: an odd function changes sign when its motion channels do.
     c = images.shape[1] // 2
     mirrored = torch.cat((images[:, :c], -images[:, c:]), dim=1)
     return (f(images) - f(mirrored)) / 2
     ### END SOLUTION
 
-# %% [check ex06-2]
+# %% [check ex06-3]
 from vgai_lite.lab.experiment_exercises import check_odd_part
 
 assert check_odd_part(my_odd_part)
@@ -588,8 +588,8 @@ from vgai_lite.features import local_features
 from vgai_lite.vision import stored_images
 from vgai_lite.lab.exercises import RESULTS
 
-if not RESULTS.get("06.2"):
-    print("The experiment runs once my_odd_part above passes its check (exercise 06.2).")
+if not RESULTS.get("06.3"):
+    print("The experiment runs once my_odd_part above passes its check (exercise 06.3).")
 else:
     plain_est, plain_vis, _ = load_estimator(DATA_DIR / "vgai" / "estimator_motion.pt")
     flights = rollout(ExpertController(cfg), cfg, r0[:pick(8, 2)], v0[:pick(8, 2)], steps=pick(191, 26))
@@ -617,7 +617,7 @@ else:
 # estimator, made odd after training, do as well as an estimator trained odd? Answer in a few
 # sentences in the cell below, from your table.
 
-# %% [markdown answer ex06-2 2]
+# %% [markdown answer ex06-3 2]
 # *Model answer.* Where the swarm has aligned the exact velocity features are 0; the plain
 # estimator reads a bias there that depends on where the neighbours stand, and its odd part removes
 # everything that does not change sign with the motion channels, so its estimates there shrink

@@ -365,7 +365,7 @@ plt.show()
 # %% [solution ex07-1]
 def my_variance_at(v, Ts, seconds):
     ### BEGIN SOLUTION
-    # HINT: the step is round(seconds / Ts); subtract the mean over agents (dim 1 after indexing), square, sum x and y, average over agents
+    # HINT: find the step that the horizon in seconds falls on, counted from the flight's start.
     vt = v[int(round(seconds / Ts))]
     return (vt - vt.mean(dim=1, keepdim=True)).square().sum(-1).mean(-1)
     ### END SOLUTION

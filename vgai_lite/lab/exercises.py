@@ -70,14 +70,15 @@ EXERCISES: dict[str, str] = {
     "04.1": "pinhole column and apparent height",
     "05.1": "residual block with vertical-only pooling",
     "06.1": "DAgger mixing rule",
-    "06.3": "the K-step BPTT loss (eq. 10, figure 3)",
+    "06.2": "the K-step BPTT loss (eq. 10, figure 3)",
     "05.2": "experiment: a panorama that wraps around",
-    "06.2": "experiment: the odd part of a CNN",
+    "05.3": "the state-estimation loss of stage 1",
+    "06.3": "experiment: the odd part of a CNN",
     "07.1": "experiment: a longer horizon",
 }
 """Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented.
-The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 05.1, 06.1, 06.3) in
-``method_exercises``; the open-ended experiments (05.2, 06.2, 07.1) have theirs in
+The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 05.1, 05.3, 06.1, 06.2) in
+``method_exercises``; the open-ended experiments (05.2, 06.3, 07.1) have theirs in
 ``experiment_exercises``: the check grades the tool the student writes; the experiment done with it
 is the student's."""
 

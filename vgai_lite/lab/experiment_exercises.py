@@ -5,7 +5,7 @@ Introduced in notebook 05. Like ``exercises``, each check runs the student's cod
 inputs against a property that defines the tool, never raises, and prints what went wrong.
 
   05.2  a convolution along the panorama's columns that wraps around (the panorama is a circle)
-  06.2  the odd part of a CNN in its motion channels (what made VGAI flock, notebook 06)
+  06.3  the odd part of a CNN in its motion channels (what made VGAI flock, notebook 06)
   07.1  the velocity variance at any horizon of a flight (what eq. 1 hides late in a flight)
 """
 
@@ -60,7 +60,7 @@ def check_circular_conv(student_cls: Callable) -> CheckResult:
 
 
 def check_odd_part(student_fn: Callable) -> CheckResult:
-    """Exercise 06.2: ``student_fn(f, images) -> x_odd`` for any function f of images (M, C, H, W)
+    """Exercise 06.3: ``student_fn(f, images) -> x_odd`` for any function f of images (M, C, H, W)
     -> (M, F), whose second half of channels is the motion D: the odd part
     (f([I, D]) - f([I, -D])) / 2, exactly 0 when nothing moves (D = 0)."""
     def body():
@@ -91,7 +91,7 @@ def check_odd_part(student_fn: Callable) -> CheckResult:
                 return False, "with D = 0 (nothing moves) the odd part must be exactly 0."
         return True, "the odd part of a random network, exactly 0 when nothing moves."
 
-    return _run("06.2", body)
+    return _run("06.3", body)
 
 
 def check_variance_at(student_fn: Callable) -> CheckResult:

@@ -1,6 +1,6 @@
 """Checks of the exercises on what makes the method: the GSO's normalisation (02.2), DAgger's data
-aggregation (03.2), the residual block of the CNN (05.1), DAgger's coin (06.1) and the K-step BPTT
-loss (06.3).
+aggregation (03.2), the residual block of the CNN (05.1), the state-estimation loss of stage 1 (05.3),
+DAgger's coin (06.1) and the K-step BPTT loss (06.2).
 
 Introduced in notebook 02. Built like ``exercises``: fresh random inputs on every run, a property or
 the library's own implementation as the reference, a hint for each mistake students make, never a
@@ -22,7 +22,7 @@ from ..graphs import gso
 from ..dagnn_training import collect
 from ..imitation import EpisodeStore, dagger_mix, fly_dagger
 from ..models import ResidualBlock
-from ..vgai_training import bptt_loss, window_action_loss
+from ..vgai_training import bptt_loss, estimation_loss, window_action_loss
 
 
 # ---------------------------------------------------------------------------------------------
@@ -313,7 +313,7 @@ def check_dagger_mix(student_fn: Callable) -> CheckResult:
 
 
 # ---------------------------------------------------------------------------------------------
-# 06.3: the K-step BPTT loss
+# 06.2: the K-step BPTT loss
 
 def _reference_bptt(cnn, mlp, images, S, u_star):
     """The library's eq. 10 through figure 3 (``vgai_training.bptt_loss``), on this check's networks."""
@@ -321,7 +321,7 @@ def _reference_bptt(cnn, mlp, images, S, u_star):
 
 
 def check_bptt_loss(student_fn: Callable) -> CheckResult:
-    """Exercise 06.3: ``student_fn(cnn, mlp, images, S, u_star) -> loss``: the loss of one step of
+    """Exercise 06.2: ``student_fn(cnn, mlp, images, S, u_star) -> loss``: the loss of one step of
     K-step BPTT (the paper's figure 3) on M windows of K steps. ``images`` (M, K, N, D): every agent's
     input at the window's K steps (oldest first); ``cnn`` maps (P, D) -> (P, F); ``S`` (M, K, N, N)
     the GSOs at those steps; ``u_star`` (M, N, 2) the expert's action at each window's last step.
@@ -376,4 +376,61 @@ def check_bptt_loss(student_fn: Callable) -> CheckResult:
                            "(eq. 6), not through S(t)^k.")
         return True, f"the L1 loss at the window's last step, with gradients through all K = {K} CNN passes."
 
-    return _run("06.3", body)
+    return _run("06.2", body)
+
+
+# ---------------------------------------------------------------------------------------------
+# 05.3: the state-estimation loss of stage 1
+
+def check_estimation_loss(student_fn: Callable) -> CheckResult:
+    """Exercise 05.3: ``student_fn(X, head, x_exact, mean, std) -> loss``: the state-estimation loss
+    of stage 1 (``vgai_training.estimation_loss``). ``X`` (M, F) the CNN's features of M agents'
+    images, ``head`` the linear aux head (F -> 6), ``x_exact`` (M, 6) the exact local features,
+    ``mean``, ``std`` (6,) their scale over the training flights. The head reads standardised
+    features: the loss is the L1 distance between head(X) and (x_exact - mean) / std, the mean over
+    agents and the six features, differentiable down to X."""
+    student_fn = guarded(student_fn, estimation_loss)  # the library's own answer does not count
+
+    def body():
+        g = _fresh_generator()
+        M, F = int(torch.randint(20, 40, (1,), generator=g)), int(torch.randint(4, 9, (1,), generator=g))
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(torch.randint(0, 2 ** 31, (1,), generator=g)))
+            head = nn.Linear(F, 6).double()
+        X = torch.randn(M, F, generator=g, dtype=torch.float64)
+        # features of very different sizes (the repulsion sums reach hundreds), as the exact ones have
+        std = torch.exp(torch.randn(6, generator=g, dtype=torch.float64) * 2)
+        mean = torch.randn(6, generator=g, dtype=torch.float64) * std
+        x_exact = mean + std * torch.randn(M, 6, generator=g, dtype=torch.float64)
+        want = nnf.l1_loss(head(X), (x_exact - mean) / std)
+        Xg = X.clone().requires_grad_(True)
+        got = student_fn(Xg, head, x_exact.clone(), mean.clone(), std.clone())
+        if not (isinstance(got, torch.Tensor) and got.numel() == 1):
+            raise AnswerMismatch(f"expected the loss as a one-number tensor, got {type(got).__name__}"
+                                 + (f" of shape {tuple(got.shape)}" if isinstance(got, torch.Tensor) else ""))
+        value = got.detach().reshape(())
+        if not _close(value, want.detach()):
+            pred = head(X).detach()
+            hint = ""
+            if _close(value, nnf.l1_loss(pred, x_exact).detach()):
+                hint = (" That compares the head's output with the raw features: the head reads standardised "
+                        "ones, (x - mean) / std, so that the large repulsion sums do not drown the velocities.")
+            elif _close(value, nnf.l1_loss(pred * std + mean, x_exact).detach()):
+                hint = (" That un-standardises the prediction instead: the loss is then dominated by the features "
+                        "with the largest spread; compare in standardised units.")
+            elif _close(value, nnf.mse_loss(pred, (x_exact - mean) / std).detach()):
+                hint = " That is the squared error; the book's losses are L1, as eq. 10."
+            elif _close(value, (pred - (x_exact - mean) / std).abs().sum().detach()):
+                hint = " Take the mean over agents and features (F.l1_loss), not the sum."
+            return False, (f"on {M} agents with F = {F} features expected the loss {want.item():.6g}, "
+                           f"got {value.item():.6g}.{hint}")
+        (grad,) = torch.autograd.grad(got.reshape(()), Xg, allow_unused=True)
+        if grad is None:
+            return False, "no gradient reaches the features X: do not detach them (the CNN learns through this loss)."
+        Xr = X.clone().requires_grad_(True)
+        (want_grad,) = torch.autograd.grad(nnf.l1_loss(head(Xr), (x_exact - mean) / std), Xr)
+        if not torch.allclose(grad.to(want_grad.dtype), want_grad, rtol=1e-4, atol=1e-9):
+            return False, "the loss's gradient with respect to X is not the L1 loss's: compute it from head(X) itself."
+        return True, "the L1 distance in standardised units, with its gradient down to the CNN's features."
+
+    return _run("05.3", body)
