@@ -730,3 +730,46 @@ def test_05_3_rejects_the_librarys_loss():
 
     result = check_estimation_loss(via_library)
     assert not result and "library's own" in result.message
+
+
+# ---------------------------------------------------------------------------------------------
+# 08.1: lost messages
+
+def lose_right(A, p, generator):
+    return A * (torch.rand(A.shape, generator=generator) >= p).to(A.dtype)
+
+
+def lose_bernoulli(A, p, generator):
+    """Correct, written another way: keep each message with a Bernoulli draw of 1 - p."""
+    return A * torch.bernoulli(torch.full(A.shape, 1.0 - p, dtype=torch.float64), generator=generator).to(A.dtype)
+
+
+@pytest.mark.parametrize("answer", [lose_right, lose_bernoulli])
+def test_08_1_passes_correct_answers(answer):
+    from vgai_lite.lab.method_exercises import check_lost_messages
+
+    assert all(passes(check_lost_messages, answer))
+
+
+def _lose_pairs(A, p, generator):
+    coin = (torch.rand(A.shape, generator=generator) >= p).float().triu(1)
+    return A * (coin + coin.transpose(-1, -2))
+
+
+def _lose_in_place(A, p, generator):
+    A[torch.rand(A.shape, generator=generator) < p] = 0
+    return A
+
+
+@pytest.mark.parametrize("answer,why", [
+    (lambda A, p, g: A * (torch.rand(A.shape) >= p).to(A.dtype), "global generator"),
+    (lambda A, p, g: A * (torch.rand(A.shape, generator=g) >= 1 - p).to(A.dtype), "p kept, not lost"),
+    (_lose_pairs, "one coin per pair"),
+    (_lose_in_place, "in place"),
+    (lambda A, p, g: A * (torch.rand(A.shape[:2], generator=g) >= p).to(A.dtype)[..., None], "one coin per agent"),
+    (lambda A, p, g: A * (1 - p), "expected value, not a draw"),
+])
+def test_08_1_rejects_wrong_answers(answer, why):
+    from vgai_lite.lab.method_exercises import check_lost_messages
+
+    assert not any(passes(check_lost_messages, answer)), why

@@ -103,7 +103,7 @@ paper_vs_book.show()
 #   module per stage of the pipeline. When a notebook calls a function, open its file: the
 #   docstring carries the equation and the shapes of every tensor, with the paper's symbols
 #   ($\mathbf S$, $\mathbf X$, $\mathbf Z$, $K$, $F$, $R$, $\rho$).
-# * **Exercises** end each notebook from 01 to 07 (08-10 report, they ask nothing): you write a real piece of the method (among them the GSO's
+# * **Exercises** end each notebook from 01 to 08 (09 and 10 sum up and ask nothing): you write a real piece of the method (among them the GSO's
 #   normalisation, DAgger's data aggregation and the K-step BPTT loss) and an automatic check
 #   tells you whether it is right, and if not, on which input it went wrong and which mistake that
 #   suggests; the open-ended experiments also ask for your written conclusion; the last cell gives

@@ -611,7 +611,7 @@ prose("* **A depth channel.** The paper's cameras give images only; ours give ea
 #   as the DAGNN rows have.
 # * The cells where VGAI does not flock (marked in the tables above) are where a better VGAI
 #   training would show first; notebook 09 lists the open problems with the measurement behind each.
-# * The exercises of notebooks 01-07 can be graded automatically; see the README's section for
+# * The exercises of notebooks 01-08 can be graded automatically; see the README's section for
 #   instructors.
 # * The same reproduction on several machines, with Ray, and how long it would take: the
 #   [appendix](10_appendix_ray.ipynb).

@@ -18,6 +18,9 @@
 # (`vgai_lite.lab.perturbations`); read a degradation curve; explain why VGAI's two-frame motion input
 # makes it fragile to pixel noise, and what lost and late messages do to each controller; and
 # measure whether a cure works.
+#
+# **You implement** lost messages as a drone meets them (exercise 08.1); an automatic check tells you
+# at once whether it is right, and the last cell gives your score.
 
 # %%
 import json
@@ -433,6 +436,60 @@ prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.
       p20s="as safe as the expert" if as_safe_as_expert(pos_big) else "not as safe as the expert")
 
 # %% [markdown]
+# ## 8. Exercise 08.1: lost messages, as a drone meets them
+#
+# In section 2 the world drops messages with `DroppedLinks`. Write that perturbation yourself:
+# `my_lost_messages(A, p, generator)` takes the links A (B, N, N) of one exchange (A_ij = 1 when i
+# hears j) and returns the links that carried a message, each message lost independently with
+# probability p. Three things make it a perturbation an experiment can trust: drone i may miss j while
+# j hears i (a message is one direction of a link); the draws come from the generator it is given, so
+# a flight is reproduced by its seed; and p = 0 changes nothing, so the clean flight is the curve's
+# first point. Then the cell below flies the DAGNN in your world and in the library's.
+
+# %% [solution ex08-1]
+def my_lost_messages(A, p, generator):
+    ### BEGIN SOLUTION
+    # HINT: one coin per message, from the generator given, and leave the graph you are handed as it was.
+    return A * (torch.rand(A.shape, generator=generator) >= p).to(A.dtype)
+    ### END SOLUTION
+
+
+# %% [check ex08-1]
+from vgai_lite.lab.method_exercises import check_lost_messages
+
+assert check_lost_messages(my_lost_messages)
+
+# %%
+from vgai_lite.evaluate import relative_cost
+from vgai_lite.lab.exercises import RESULTS
+from vgai_lite.lab.perturbations import Perturbation
+
+
+class MyLostMessages(Perturbation):
+    """Your function as a perturbed world's links (``perturbations.Perturbation.links``)."""
+
+    def __init__(self, p):
+        self.p = p
+
+    def links(self, A, world):
+        return my_lost_messages(A, self.p, world.generator)
+
+    def __repr__(self):
+        return f"MyLostMessages({self.p:g})"
+
+
+if not RESULTS.get("08.1"):
+    print("The flight runs once my_lost_messages above passes its check (exercise 08.1).")
+else:
+    yours = relative_cost(perturbed(dagnn, MyLostMessages(0.2), seed=1), cfg, episodes=pick(10, 2), seed=WORKING_SEED)
+    library = relative_cost(perturbed(dagnn, DroppedLinks(0.2), seed=1), cfg, episodes=pick(10, 2), seed=WORKING_SEED)
+    display(prose("With 20% of the messages lost, the DAGNN costs {yours:.2f} in your world and {lib:.2f} in the "
+                  "library's, on the same {n} working episodes and seed: {verdict}.", yours=yours.mean_ratio,
+                  lib=library.mean_ratio, n=yours.episodes,
+                  verdict=("the same flights, draw for draw" if torch.equal(yours.cost, library.cost) else
+                           "other draws of the same kind of world, so close but not equal costs")))
+
+# %% [markdown]
 # ## Key takeaways
 #
 # * A library that takes states must refuse non-finite ones loudly and say where they came from; a
@@ -452,3 +509,13 @@ prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.
 # **References.** Hu et al., *VGAI*, ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)), section 4;
 # Tolstaya et al., *Learning decentralized controllers for robot swarms with graph neural networks*, CoRL 2019
 # ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527); the DAGNN's features).
+
+# %% [markdown]
+# ## Your score
+#
+# The checks run so far in this session, for this notebook's exercise.
+
+# %%
+from vgai_lite.lab.exercises import score
+
+score("08");

@@ -75,9 +75,10 @@ EXERCISES: dict[str, str] = {
     "05.3": "the state-estimation loss of stage 1",
     "06.3": "experiment: the odd part of a CNN",
     "07.1": "experiment: a longer horizon",
+    "08.1": "lost messages, as a drone meets them",
 }
 """Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented.
-The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 05.1, 05.3, 06.1, 06.2) in
+The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 05.1, 05.3, 06.1, 06.2, 08.1) in
 ``method_exercises``; the open-ended experiments (05.2, 06.3, 07.1) have theirs in
 ``experiment_exercises``: the check grades the tool the student writes; the experiment done with it
 is the student's."""

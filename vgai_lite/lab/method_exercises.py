@@ -1,6 +1,6 @@
 """Checks of the exercises on what makes the method: the GSO's normalisation (02.2), DAgger's data
 aggregation (03.2), the residual block of the CNN (05.1), the state-estimation loss of stage 1 (05.3),
-DAgger's coin (06.1) and the K-step BPTT loss (06.2).
+DAgger's coin (06.1), the K-step BPTT loss (06.2) and lost messages (08.1).
 
 Introduced in notebook 02. Built like ``exercises``: fresh random inputs on every run, a property or
 the library's own implementation as the reference, a hint for each mistake students make, never a
@@ -22,6 +22,7 @@ from ..graphs import gso
 from ..dagnn_training import collect
 from ..imitation import EpisodeStore, dagger_mix, fly_dagger
 from ..models import ResidualBlock
+from .perturbations import DroppedLinks
 from ..vgai_training import bptt_loss, estimation_loss, window_action_loss
 
 
@@ -434,3 +435,55 @@ def check_estimation_loss(student_fn: Callable) -> CheckResult:
         return True, "the L1 distance in standardised units, with its gradient down to the CNN's features."
 
     return _run("05.3", body)
+
+
+# ---------------------------------------------------------------------------------------------
+# 08.1: lost messages, as a drone would meet them
+
+def check_lost_messages(student_fn: Callable) -> CheckResult:
+    """Exercise 08.1: ``student_fn(A, p, generator) -> A_heard``: the links (B, N, N) that carried a
+    message this exchange, A_ij = 1 when i hears j. Each message is lost independently with
+    probability p: i may miss j while j hears i. The draws come from ``generator`` (a run is
+    reproduced by seeding it), the input is left as it was, and p = 0 changes nothing."""
+    student_fn = guarded(student_fn, DroppedLinks.links)  # the library's own answer does not count
+
+    def body():
+        g = _fresh_generator()
+        B, N = 64, int(torch.randint(5, 10, (1,), generator=g))
+        A = ((_random_adjacency(g, B, N) + torch.roll(torch.eye(N), 1, 0) + torch.roll(torch.eye(N), -1, 0)) > 0).float()
+        A = A * (1 - torch.eye(N))
+        for p in (0.0, 0.25, 0.6, 1.0):
+            seed = int(torch.randint(0, 2 ** 31, (1,), generator=g))
+            before = A.clone()
+            got = student_fn(A, p, torch.Generator().manual_seed(seed))
+            if not torch.equal(A, before):
+                return False, "your function changed its input A in place: return a new tensor, the graph itself is not lost."
+            got = _as_tensor(got, A.shape, "the links that carried a message")
+            if not ((got == 0) | (got == A)).all():
+                return False, "each entry must be the link as it was (a message heard) or 0 (lost): nothing else, no new links."
+            if p == 0 and not torch.equal(got, A.double()):
+                return False, "with p = 0 no message is lost: the links must come back unchanged."
+            kept = float(got.sum() / A.sum())
+            if abs(kept - (1 - p)) > 0.06:
+                return False, f"with p = {p} your function kept {kept:.0%} of the messages; each is lost with probability p."
+            if 0 < p < 1:
+                both = (A * A.transpose(-1, -2)).bool()
+                one_way = (got.bool() ^ got.transpose(-1, -2).bool()) & both
+                share = float(one_way.sum() / both.sum())
+                if share < p * (1 - p):  # independent directions: about 2 p (1 - p) of the pairs hear one way
+                    return False, ("a lost message is one direction of a link: when i misses j, j may still hear i. "
+                                   "Draw one coin per message (i, j), not one per pair.")
+                rows = A.sum(-1) >= 3  # an agent's messages are lost one by one, not all at once
+                heard = got.sum(-1)
+                all_or_none = ((heard == 0) | (heard == A.sum(-1)))[rows].double().mean()
+                if all_or_none > 0.75:
+                    return False, ("an agent lost all of its messages or none: each message (i, j) is lost on its own, "
+                                   "so an agent with several neighbours usually hears some of them.")
+                torch.manual_seed(seed + 1)  # the global generator stirred between the two calls
+                again = student_fn(A, p, torch.Generator().manual_seed(seed))
+                if not torch.equal(_as_tensor(again, A.shape, "the links"), got):
+                    return False, ("two calls with generators seeded alike lost different messages: draw from the "
+                                   "`generator` argument, not from torch's global random state.")
+        return True, "each message lost independently with probability p, reproducibly, nothing changed at p = 0."
+
+    return _run("08.1", body)
