@@ -773,3 +773,88 @@ def test_08_1_rejects_wrong_answers(answer, why):
     from vgai_lite.lab.method_exercises import check_lost_messages
 
     assert not any(passes(check_lost_messages, answer)), why
+
+
+# ---------------------------------------------------------------------------------------------
+# 03.3: DAgger's training loop
+
+def dagger_loop(learner, fit, expert, step, starts, steps, p, generator, *, aggregate=True, fit_each=True,
+                p0=0.0, coin="swarm", label="expert", rng="given", flip=False):
+    data = {"r": [], "v": [], "u": []}
+    for k, (r, v) in enumerate(starts):
+        pk = p0 if k == 0 else (1 - p if flip else p)
+        if not aggregate:
+            data = {"r": [], "v": [], "u": []}
+        for _ in range(steps):
+            u_star, u_l = expert(r, v), learner(r, v)
+            gen = generator if rng == "given" else None
+            shape = (r.shape[0],) if coin == "swarm" else r.shape[:2]
+            follow = torch.rand(shape, generator=gen) < pk
+            u = torch.where(follow.view(*shape, *([1] * (3 - len(shape)))), u_l, u_star)
+            data["r"].append(r), data["v"].append(v), data["u"].append(u_star if label == "expert" else u)
+            r, v = step(r, v, u)
+        if fit_each:
+            fit(data)
+    if not fit_each:
+        fit(data)
+    return data
+
+
+def dagger_loop_with_library_coin(learner, fit, expert, step, starts, steps, p, generator):
+    """Correct: the library's coin (dagger_mix) is allowed here; the loop is the exercise."""
+    from vgai_lite.imitation import dagger_mix
+
+    data = {"r": [], "v": [], "u": []}
+    for k, (r, v) in enumerate(starts):
+        for _ in range(steps):
+            u_star = expert(r, v)
+            data["r"] += [r]
+            data["v"] += [v]
+            data["u"] += [u_star]
+            r, v = step(r, v, dagger_mix(learner(r, v), u_star, p if k else 0.0, generator))
+        fit(data)
+    return data
+
+
+@pytest.mark.parametrize("answer", [dagger_loop, dagger_loop_with_library_coin])
+def test_03_3_passes_correct_answers(answer):
+    from vgai_lite.lab.method_exercises import check_dagger_training
+
+    assert all(passes(check_dagger_training, answer))
+
+
+@pytest.mark.parametrize("kwargs,why", [
+    ({"aggregate": False}, "each round's data alone"),
+    ({"fit_each": False}, "one fit at the end"),
+    ({"p0": 0.4}, "the untrained learner flies round 0"),
+    ({"coin": "agent"}, "one coin per agent"),
+    ({"rng": "global"}, "global generator"),
+    ({"label": "applied"}, "labels are the applied actions"),
+    ({"flip": True}, "p for the expert"),
+])
+def test_03_3_rejects_wrong_answers(kwargs, why):
+    from vgai_lite.lab.method_exercises import check_dagger_training
+
+    answer = lambda *args: dagger_loop(*args, **kwargs)
+    assert not any(passes(check_dagger_training, answer)), why
+
+
+def test_03_3_rejects_a_loop_that_never_fits_and_the_librarys_training():
+    from vgai_lite.dagnn_training import train_dagnn
+    from vgai_lite.lab.method_exercises import check_dagger_training
+
+    never = lambda learner, fit, expert, step, starts, steps, p, g: {"r": [], "v": [], "u": []}
+    assert not check_dagger_training(never)
+
+    def library(learner, fit, expert, step, starts, steps, p, g):
+        train_dagnn(vl_cfg_small())
+        return {"r": [], "v": [], "u": []}
+
+    result = check_dagger_training(library)
+    assert not result and "library's own" in result.message
+
+
+def vl_cfg_small():
+    from vgai_lite import FlockConfig
+
+    return FlockConfig(N=5, T=5)

@@ -18,9 +18,9 @@
 # aggregation MLP; train it by imitation with DAgger; read the effect of the number of exchanges K-1
 # and of the GSO on the relative cost.
 #
-# **You implement** the six local features a drone measures from its neighbours (exercise 03.1) and
-# one DAgger round's data aggregation (exercise 03.2); an automatic check tells you at once whether
-# each is right, and the last cell gives your score.
+# **You implement** the six local features a drone measures from its neighbours (exercise 03.1), one
+# DAgger round's data aggregation (exercise 03.2) and DAgger's training loop (exercise 03.3); an
+# automatic check tells you at once whether each is right, and the last cell gives your score.
 
 # %%
 import time
@@ -410,6 +410,39 @@ def my_dagger_round(data, learner, expert, mix, step, r0, v0, steps):
 from vgai_lite.lab.method_exercises import check_dagger_round
 
 assert check_dagger_round(my_dagger_round)
+
+# %% [markdown]
+# ## 13. Exercise 03.3: DAgger's training loop
+#
+# Now the whole of section 6's training: `my_dagger(learner, fit, expert, step, starts, steps, p,
+# generator)` runs one round per start (r0, v0) in `starts`. Each round flies `steps` steps, records
+# every state with the expert's label, and applies the learner's action instead with probability p,
+# one coin per swarm and step from `generator`; after each round `fit(data)` fits the learner on the
+# data of every round so far. Return the data. You may reuse your `my_dagger_round`; the check flies a
+# toy swarm, fits a linear learner in closed form, and judges the loop by what the trained learner does
+# on fresh states against the expert, and by the states and labels it was fitted on.
+
+# %% [solution ex03-3]
+def my_dagger(learner, fit, expert, step, starts, steps, p, generator):
+    ### BEGIN SOLUTION
+    # HINT: the first round has nothing to learn from the learner yet, and every fit sees every round's data.
+    data = {"r": [], "v": [], "u": []}
+    for k, (r0, v0) in enumerate(starts):
+        p_k = p if k > 0 else 0.0
+
+        def mix(u_learner, u_star):
+            follow = torch.rand(u_star.shape[0], generator=generator) < p_k
+            return torch.where(follow[:, None, None], u_learner, u_star)
+
+        data = my_dagger_round(data, learner, expert, mix, step, r0, v0, steps)
+        fit(data)
+    return data
+    ### END SOLUTION
+
+# %% [check ex03-3]
+from vgai_lite.lab.method_exercises import check_dagger_training
+
+assert check_dagger_training(my_dagger)
 
 # %% [markdown]
 # ## Key takeaways

@@ -78,6 +78,51 @@ plt.tight_layout()
 plt.show()
 
 # %% [markdown]
+# ### What a real camera delivers
+#
+# The renderer draws the ideal frame. A camera delivers it through a lens, an exposure and a noisy
+# sensor (`vgai_lite/camera.py`):
+#
+# $$\mathbf I_{\text{cam}} = \operatorname{clip}\big(a\,(G_b * \mathbf I) + c + \sigma\,\mathbf n,\ 0,\ 1\big),
+# \qquad \mathbf n \sim \mathcal N(0, 1) \text{ per pixel and frame},$$
+#
+# with $G_b$ a Gaussian blur of $b$ degrees of view (so that a setting means the same at every
+# resolution: a column here is 90°/32 = 2.8° wide, a row 5° tall), $a$ and $c$ the exposure's gain
+# and offset, and a dead camera showing 0 on its quarter of the panorama. The noise of a frame is
+# drawn from its own time, so the frame of $t - g$ that the motion channel pairs with the frame of
+# $t$ is the one the drone really saw then. The paper's authors test their VGAI with $\sigma$ =
+# 10/255 and a 5 × 5 box blur at 144 × 256, about 0.5°. Below, drone 0's front camera (gray channel
+# and the motion channel) at a few settings: the motion channel is where the noise hurts, since it
+# is a difference of two noisy frames, amplified by the same gain that makes the small motions
+# readable. A training can draw these settings per flight (`VGAITrainConfig.camera`, a
+# `CameraRanges`): notebook 08 measures what that buys.
+
+# %%
+from vgai_lite.camera import Camera, CameraRanges
+from vgai_lite.vision import camera_input, positions_before
+
+sigmas, blurs = (0.0, 10 / 255, 0.05, 0.1), (0.0, 0.5, 1.4, 2.8)
+e0, t0 = torch.tensor([0]), torch.tensor([t])
+fig, axes = plt.subplots(len(sigmas), len(blurs), figsize=(12, 4.6))
+for i, sigma in enumerate(sigmas):
+    for j, blur in enumerate(blurs):
+        cam = Camera(CameraRanges(noise=(sigma, sigma), blur_deg=(blur, blur)), vision.render, 1, cfg.N,
+                     torch.Generator().manual_seed(0))
+        seen = camera_input(vision, cfg, traj.r[t, e0], positions_before(vision, cfg, traj.r, traj.v, e0, t0),
+                            cam.at(t))[0, 0]  # drone 0: (4, H, W)
+        front = seen[:, :, :rc.view_width]
+        axes[i, j].imshow(torch.cat((front[0], 0.5 + 0.5 * front[2].clamp(-1, 1)), dim=1), cmap="gray",
+                          vmin=0, vmax=1, aspect="auto")
+        axes[i, j].set_xticks([]), axes[i, j].set_yticks([])
+        if i == 0:
+            axes[i, j].set_title(f"blur {blur:g}°", fontsize=9)
+        if j == 0:
+            axes[i, j].set_ylabel(f"σ = {sigma:.3g}", fontsize=9)
+fig.suptitle("drone 0's front camera: gray I(t) (left half) and the motion channel (right half, grey = 0)", fontsize=10)
+plt.tight_layout()
+plt.show()
+
+# %% [markdown]
 # ## 2. The architecture
 #
 # | stage | operation | output |

@@ -360,7 +360,92 @@ lines.append(f"The fine-tune on noisy frames took {aug['finetune_seconds'] / 60:
 prose("{text}", text=" ".join(lines))
 
 # %% [markdown]
-# ## 6. Larger teams in a perturbed world
+# ## 6. Trained through the camera from the start
+#
+# The cure section 5 points to: every stage of the training sees the frames through a camera whose
+# settings are drawn anew for every flight and every training window (`VGAITrainConfig.camera`, a
+# `CameraRanges`; notebook 05 shows the camera model): stage 1's states, stage 2's flights, stage 3's
+# windows and the learner's own DAgger flights. Two trainings of the book's recipe, one with the
+# gray and depth channels (a depth camera), one with the gray channel only (the paper's sensor has
+# no depth), flown below with clean frames, sensor noise, lens blur (in degrees of view) and a dead
+# camera, beside the shipped VGAI trained on clean frames. These are choices between recipes, so
+# they are flown on the validation episodes.
+
+# %%
+from vgai_lite.camera import CameraRanges
+
+CAMERA_RUNS = {"shipped: clean frames, gray + depth": "vgai_F24",
+               "through the camera, gray + depth": "vgai_camera",
+               "through the camera, gray only": "vgai_camera_gray"}
+cam_eval = {label: json.loads((exp_dir / f"{name}_cameras.json").read_text())["settings"]
+            for label, name in CAMERA_RUNS.items()}
+cam_train = {name: json.loads((exp_dir / f"{name}.json").read_text()) for name in ("vgai_camera", "vgai_camera_gray")}
+ranges = CameraRanges.from_dict(cam_train["vgai_camera"]["train_config"]["camera"])
+first = next(iter(cam_eval.values()))["clean"]
+noise_keys = sorted((k for k in next(iter(cam_eval.values())) if k.startswith("noise")), key=lambda k: float(k[5:]))
+blur_keys = sorted((k for k in next(iter(cam_eval.values())) if k.startswith("blur")), key=lambda k: float(k[4:]))
+fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+for label, ev in cam_eval.items():
+    xs = [0.0] + [float(k[5:]) for k in noise_keys]
+    axes[0].plot(xs, [ev[k]["relative_cost_mean"] for k in ["clean"] + noise_keys], "o-", label=label)
+    xb = [0.0] + [float(k[4:]) for k in blur_keys]
+    axes[1].plot(xb, [ev[k]["relative_cost_mean"] for k in ["clean"] + blur_keys], "o-", label=label)
+sizes, recs = robustness.curve(results, "DAGNN", "position_noise")
+axes[2].plot(sizes, [r["relative_cost_mean"] for r in recs], "o-", color=controller_color("DAGNN"), label="DAGNN")
+for ax, xl in zip(axes, ("sensor noise σ (pixel values in [0, 1])", "lens blur (degrees of view)",
+                         "DAGNN: position noise (m), test episodes")):
+    ax.set_xlabel(xl), ax.set_ylabel("relative cost"), ax.set_yscale("log")
+axes[0].axvline(10 / 255, color="0.6", ls=":"), axes[1].axvline(0.5, color="0.6", ls=":")  # the authors' test
+axes[0].legend(fontsize=8)
+plt.tight_layout()
+plt.show()
+
+
+def cam_cell(rec):
+    lo, hi = rec["relative_cost_mean_ci95"]
+    return (f"{rec['relative_cost_mean']:.2f} ({lo:.2f}-{hi:.2f}) · {rec['velocity_variance_median']['5s']:.1e} · "
+            f"{'flocked' if rec['flocked'] else '**did not flock**'}{'' if rec['safe'] else ', **unsafe**'}")
+
+
+settings = ["clean"] + noise_keys + blur_keys + ["dead"]
+display(Markdown("| setting | " + " | ".join(cam_eval) + " |\n|---|" + "---|" * len(cam_eval) + "\n" + "\n".join(
+    f"| {k} | " + " | ".join(cam_cell(ev[k]) for ev in cam_eval.values()) + " |" for k in settings)
+    + f"\n\nEach cell: relative cost (95% CI) · median velocity variance at 5 s [m²/s²] · flocked and safe by the "
+      f"book's rules; {first['episodes']} validation episodes (seed {first['seed']})."))
+
+# %%
+depth, gray = cam_eval["through the camera, gray + depth"], cam_eval["through the camera, gray only"]
+authors = f"noise{10 / 255:.4g}"
+local_cost = robustness.find(results, "Local")["relative_cost_mean"]
+ok = lambda flag: "met" if flag else "**missed**"
+prose("The training drew sensor noise σ in [{n0:g}, {n1:g}], lens blur in [{b0:g}°, {b1:g}°], gain in [{g0:g}, {g1:g}], "
+      "offset in [{o0:g}, {o1:g}] and a dead camera on {dead:.0%} of the drones, per flight and per window (ranges chosen "
+      "to cover the authors' test and the sweep's harder settings, not searched). Judged by the issue's targets on "
+      "these validation episodes, for the depth camera: at the authors' noise {a1} (flocked and safe at ≤ 1.25× its "
+      "clean cost: {ac:.2f} against {cc:.2f}), at the authors' blur {a2} ({bc:.2f}); at σ = 0.05 {a3} and at blur 1.4° "
+      "{a4} (flocked); never flying apart at σ = 0.1, blur 2.8° and a dead camera {a5} (connected ≥ 90% and below the local "
+      "heuristic's {loc:.2f}); clean frames {a6} (≤ 1.6 and flocked: {cc:.2f}). The gray-only VGAI: clean and at the "
+      "authors' noise {a7} (flocked and ≤ 2.0: {gc:.2f} and {gn:.2f}). The trainings took {m1:.0f} and {m2:.0f} min "
+      "({h1}; {h2}).",
+      n0=ranges.noise[0], n1=ranges.noise[1], b0=ranges.blur_deg[0], b1=ranges.blur_deg[1], g0=ranges.gain[0],
+      g1=ranges.gain[1], o0=ranges.offset[0], o1=ranges.offset[1], dead=ranges.dead_share,
+      a1=ok(depth[authors]["flocked"] and depth[authors]["safe"]
+            and depth[authors]["relative_cost_mean"] <= 1.25 * depth["clean"]["relative_cost_mean"]),
+      ac=depth[authors]["relative_cost_mean"], cc=depth["clean"]["relative_cost_mean"],
+      a2=ok(depth["blur0.5"]["flocked"] and depth["blur0.5"]["safe"]
+            and depth["blur0.5"]["relative_cost_mean"] <= 1.25 * depth["clean"]["relative_cost_mean"]),
+      bc=depth["blur0.5"]["relative_cost_mean"],
+      a3=ok(depth["noise0.05"]["flocked"]), a4=ok(depth["blur1.4"]["flocked"]),
+      a5=ok(all(depth[k]["share_connected_at_end"] >= 0.9 and depth[k]["relative_cost_mean"] < local_cost
+                for k in ("noise0.1", "blur2.8", "dead"))), loc=local_cost,
+      a6=ok(depth["clean"]["flocked"] and depth["clean"]["relative_cost_mean"] <= 1.6),
+      a7=ok(all(gray[k]["flocked"] and gray[k]["relative_cost_mean"] <= 2.0 for k in ("clean", authors))),
+      gc=gray["clean"]["relative_cost_mean"], gn=gray[authors]["relative_cost_mean"],
+      m1=training_minutes(cam_train["vgai_camera"]), m2=training_minutes(cam_train["vgai_camera_gray"]),
+      h1=how_trained(cam_train["vgai_camera"]), h2=how_trained(cam_train["vgai_camera_gray"]))
+
+# %% [markdown]
+# ## 7. Larger teams in a perturbed world
 #
 # Trained on 50 drones, flown by 100 and 200 with the perturbations that hurt most at 50 (fewer
 # episodes per cell, and the flocking figures at 2 s only, because a VGAI drone renders a view of
@@ -379,7 +464,7 @@ display(Markdown("| controller | N' | perturbation | episodes | relative cost (9
                      for c, rec in big)))
 
 # %% [markdown]
-# ## 7. The lesson: which controller degrades gracefully, and why
+# ## 8. The lesson: which controller degrades gracefully, and why
 #
 # The cell below reads the lesson off the sweep; the reasons are ours.
 
@@ -436,7 +521,7 @@ prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.
       p20s="as safe as the expert" if as_safe_as_expert(pos_big) else "not as safe as the expert")
 
 # %% [markdown]
-# ## 8. Exercise 08.1: lost messages, as a drone meets them
+# ## 9. Exercise 08.1: lost messages, as a drone meets them
 #
 # In section 2 the world drops messages with `DroppedLinks`. Write that perturbation yourself:
 # `my_lost_messages(A, p, generator)` takes the links A (B, N, N) of one exchange (A_ij = 1 when i

@@ -67,6 +67,7 @@ EXERCISES: dict[str, str] = {
     "02.2": "symmetric normalised GSO",
     "03.1": "local features (DAGNN input)",
     "03.2": "one DAgger round's data aggregation",
+    "03.3": "DAgger's training loop",
     "04.1": "pinhole column and apparent height",
     "05.1": "residual block with vertical-only pooling",
     "06.1": "DAgger mixing rule",
@@ -78,7 +79,7 @@ EXERCISES: dict[str, str] = {
     "08.1": "lost messages, as a drone meets them",
 }
 """Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented.
-The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 05.1, 05.3, 06.1, 06.2, 08.1) in
+The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 03.3, 05.1, 05.3, 06.1, 06.2, 08.1) in
 ``method_exercises``; the open-ended experiments (05.2, 06.3, 07.1) have theirs in
 ``experiment_exercises``: the check grades the tool the student writes; the experiment done with it
 is the student's."""

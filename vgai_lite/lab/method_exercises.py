@@ -1,5 +1,5 @@
 """Checks of the exercises on what makes the method: the GSO's normalisation (02.2), DAgger's data
-aggregation (03.2), the residual block of the CNN (05.1), the state-estimation loss of stage 1 (05.3),
+aggregation (03.2) and training loop (03.3), the residual block of the CNN (05.1), the state-estimation loss of stage 1 (05.3),
 DAgger's coin (06.1), the K-step BPTT loss (06.2) and lost messages (08.1).
 
 Introduced in notebook 02. Built like ``exercises``: fresh random inputs on every run, a property or
@@ -19,7 +19,7 @@ from torch import nn
 from ..aggregation import aggregation_sequence
 from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run, guarded
 from ..graphs import gso
-from ..dagnn_training import collect
+from ..dagnn_training import collect, train_dagnn
 from ..imitation import EpisodeStore, dagger_mix, fly_dagger
 from ..models import ResidualBlock
 from .perturbations import DroppedLinks
@@ -487,3 +487,102 @@ def check_lost_messages(student_fn: Callable) -> CheckResult:
         return True, "each message lost independently with probability p, reproducibly, nothing changed at p = 0."
 
     return _run("08.1", body)
+
+
+# ---------------------------------------------------------------------------------------------
+# 03.3: the DAgger training loop
+
+class _LinearPolicy:
+    """u_i = W [r_i - mean r, v_i, 1]: a learner the check can fit in closed form; (r, v) (B, N, 2) -> (B, N, 2)."""
+
+    def __init__(self):
+        self.W = torch.zeros(5, 2, dtype=torch.float64)
+
+    @staticmethod
+    def features(r, v):
+        return torch.cat((r - r.mean(1, keepdim=True), v, torch.ones_like(r[..., :1])), dim=-1)
+
+    def __call__(self, r, v):
+        return self.features(r, v) @ self.W
+
+
+def check_dagger_training(student_fn: Callable) -> CheckResult:
+    """Exercise 03.3: ``student_fn(learner, fit, expert, step, starts, steps, p, generator) -> data``:
+    DAgger's training loop. ``starts`` is a list of (r0, v0), one per round, each (B, N, 2). Round k
+    flies ``steps`` steps from starts[k]: at each, record the state and the expert's label u* =
+    expert(r, v), and apply the learner's action learner(r, v) instead of u* with probability p, one
+    coin per swarm and step from ``generator`` (round 0 flies the expert alone: the learner has learned
+    nothing yet). After each round, ``fit(data)`` fits the learner on the data of every round so far.
+    ``data`` is a dict of lists "r", "v", "u", one (B, N, 2) tensor per visited step; return it."""
+    student_fn = guarded(student_fn, fly_dagger, EpisodeStore.fly, collect, train_dagnn)  # the library's own loop
+
+    def body():
+        g = _fresh_generator()
+        B, N, steps, rounds, p = 32, int(torch.randint(4, 7, (1,), generator=g)), 10, 3, 0.4
+        a = 0.5 + float(torch.rand((), generator=g))
+        expert = lambda r, v: -a * v - 0.3 * torch.tanh(3 * (r - r.mean(1, keepdim=True)))  # not linear: the learner errs
+        step = lambda r, v, u: (r + 0.1 * v, v + 0.1 * u)
+        starts = [(torch.randn(B, N, 2, generator=g, dtype=torch.float64),
+                   torch.randn(B, N, 2, generator=g, dtype=torch.float64)) for _ in range(rounds)]
+        seed = int(torch.randint(0, 2 ** 31, (1,), generator=g))
+
+        def run(stir: int):
+            learner, fitted = _LinearPolicy(), []
+
+            def fit(data):
+                fitted.append((len(data["r"]), learner.W.clone()))
+                X = torch.cat([learner.features(r, v).reshape(-1, 5) for r, v in zip(data["r"], data["v"])])
+                U = torch.cat([u.reshape(-1, 2) for u in data["u"]])
+                learner.W = torch.linalg.solve(X.T @ X + 1e-6 * torch.eye(5, dtype=X.dtype), X.T @ U)
+
+            torch.manual_seed(seed + stir)  # the global generator in another state at each run
+            data = student_fn(learner, fit, expert, step, [(r.clone(), v.clone()) for r, v in starts], steps, p,
+                              torch.Generator().manual_seed(seed))
+            return learner, fitted, data
+
+        learner, fitted, data = run(1)
+        if not (isinstance(data, dict) and all(isinstance(data.get(k), list) for k in "rvu")):
+            raise AnswerMismatch('expected the data back as a dict of lists "r", "v", "u"')
+        if [n for n, _ in fitted] != [steps * (k + 1) for k in range(rounds)]:
+            return False, (f"fit saw {[n for n, _ in fitted] or 'no'} states at its calls; expected one call after each of "
+                           f"the {rounds} rounds, on the data of every round so far ({[steps * (k + 1) for k in range(rounds)]}): "
+                           "DAgger aggregates, and fits after every round.")
+        if not all(len(data[k]) == rounds * steps for k in "rvu"):
+            return False, f'expected {rounds} x {steps} entries in each of "r", "v", "u", one per visited step.'
+        if not all(torch.equal(u, expert(r, v)) for r, v, u in zip(data["r"], data["v"], data["u"])):
+            return False, "every recorded state is labelled with the expert's action at that state, whoever flew it."
+        r, v = starts[0]
+        for t in range(steps):
+            if not (torch.equal(data["r"][t], r) and torch.equal(data["v"][t], v)):
+                return False, ("round 0 must fly the expert alone (p = 0): the learner has learned nothing yet, and "
+                               "its states would teach the fit nothing about the expert's.")
+            r, v = step(r, v, expert(r, v))
+        followed, coins = 0, 0
+        for k in range(1, rounds):
+            W = fitted[k][1]  # the learner as it flew round k: fitted after round k - 1
+            if not (torch.equal(data["r"][k * steps], starts[k][0]) and torch.equal(data["v"][k * steps], starts[k][1])):
+                return False, f"round {k} must start from starts[{k}]."
+            for t in range(k * steps, (k + 1) * steps - 1):
+                r, v, r1, v1 = data["r"][t], data["v"][t], data["r"][t + 1], data["v"][t + 1]
+                u = (v1 - v) / 0.1
+                u_l = _LinearPolicy.features(r, v) @ W
+                is_l = ((u - u_l).abs() < 1e-9).all(-1).all(-1)
+                is_e = ((u - data["u"][t]).abs() < 1e-9).all(-1).all(-1)
+                if not (is_l | is_e).all():
+                    return False, ("each swarm applies either the learner's or the expert's action at a step, as a whole "
+                                   "(one coin per swarm and step), and flies on from the state it reached.")
+                followed, coins = followed + int((is_l & ~is_e).sum()), coins + B
+        if abs(followed / coins - p) > 0.08:
+            return False, f"with p = {p} your swarms followed the learner {followed / coins:.0%} of the time after round 0."
+        _, _, again = run(2)
+        if not all(torch.equal(x, y) for k in "rvu" for x, y in zip(data[k], again[k])):
+            return False, ("two runs with generators seeded alike differ: draw the coins from the `generator` argument, "
+                           "not from torch's global random state.")
+        r, v = torch.randn(B, N, 2, generator=g, dtype=torch.float64), torch.randn(B, N, 2, generator=g, dtype=torch.float64)
+        err = float((learner(r, v) - expert(r, v)).pow(2).mean().sqrt() / expert(r, v).pow(2).mean().sqrt())
+        if err > 0.3:
+            return False, f"the trained learner is off the expert by {err:.0%} on fresh states: fit it after every round."
+        return True, (f"{rounds} rounds, the expert alone first, then DAgger's mixture, every round's data kept and fitted; "
+                      f"the trained learner is within {err:.0%} of the expert on fresh states.")
+
+    return _run("03.3", body)
