@@ -151,3 +151,25 @@ def test_prose_holds_no_hand_typed_measurement(source):
     assert not bad, (f"{source.name}: numbers typed into markdown cells {bad} (cell index, number): render "
                      "measured numbers with vgai_lite.book.prose, or add a defining number to DEFINED_NUMBERS "
                      "with its reason")
+
+
+def test_the_model_answers_claims_match_the_outputs_they_discuss():
+    """07.1's model answer says the DAGNN levels off: the committed run's computed reading must say so too.
+    05.2's model answer makes no claim on the direction; its run's reading says which way it went."""
+    def outputs(name):
+        nb = nbformat.read(ROOT / "notebooks" / name, as_version=4)
+        texts = []
+        for cell in nb.cells:
+            for out in cell.get("outputs", []):
+                data = out.get("data", {})
+                texts.append(out.get("text", "") + data.get("text/markdown", "") + data.get("text/plain", ""))
+        return "\n".join(texts), "\n".join(c.source for c in nb.cells if c.cell_type == "markdown")
+
+    out07, md07 = outputs("07_experiments.ipynb")
+    reading = [line for line in out07.splitlines() if line.startswith("Read off this run")]
+    assert reading, "07.1's experiment printed no reading"
+    if "even the DAGNN" in md07 and "levels off" in md07:
+        assert "DAGNN levels off" in reading[0], reading[0]
+    out05, md05 = outputs("05_visual_state_cnn.ipynb")
+    assert any(line.startswith("Read off this run") for line in out05.splitlines())
+    assert "should fall" not in md05 and "should rise" not in md05

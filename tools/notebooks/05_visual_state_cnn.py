@@ -349,7 +349,11 @@ assert check_circular_conv(MyCircularConv)
 # %% [markdown]
 # **The experiment.** Turning the world by 180° rolls every panorama by half its width and negates
 # all six local features (they are sums of vectors). A CNN that respects the panorama's circle would
-# see that exactly: $\mathrm{est}(\text{roll}(\mathbf H)) = -\mathrm{est}(\mathbf H)$. Below, two
+# see that exactly: $\mathrm{est}(\text{roll}(\mathbf H)) = -\mathrm{est}(\mathbf H)$. No padding gives
+# the estimator that symmetry by construction: circular padding makes the convolutional trunk roll
+# exactly with the panorama, but the fully connected layers after it weigh every column with its
+# own weights, so the symmetry, if any, is learned. The question is whether removing the seam
+# helps the training learn it. Below, two
 # estimators are trained the same short way (a few hundred steps, from the same seed), one with the
 # book's zero padding and one whose column convolutions are your `MyCircularConv`, and each is scored
 # on held-out expert flights: its correlation with the exact features and how far it is from that
@@ -382,7 +386,7 @@ else:
         return cnn
 
 
-    rows, half = [], vision.render.panorama_width // 2
+    rows, measured, half = [], {}, vision.render.panorama_width // 2
     for label, make in (("zero padding (the book's)", lambda c: c), ("circular padding (yours)", circular)):
         torch.manual_seed(0)
         cnn = make(tc.new_model().cnn)
@@ -395,8 +399,13 @@ else:
         corr = [float(torch.corrcoef(torch.stack((est[:, k], exact_now[:, k])))[0, 1]) for k in range(6)]
         asym = float((turned + est).abs().mean() / est.abs().mean())
         rows.append(f"| {label} | {' | '.join(f'{c:.2f}' for c in corr)} | {asym:.3f} | {time.perf_counter() - t0:.0f} s |")
+        measured[label] = (sum(corr) / len(corr), asym)
     display(Markdown("| estimator | " + " | ".join(FEATURE_NAMES) + " | distance from the 180° symmetry | training |\n"
                      "|---|" + "---|" * 8 + "\n" + "\n".join(rows)))
+    (c0, a0), (c1, a1) = measured.values()
+    display(prose("Read off this run: with circular padding the distance from the 180° symmetry {went} ({a0:.3f} → "
+                  "{a1:.3f}) and the mean correlation with the exact features moved from {c0:.2f} to {c1:.2f}.",
+                  went="fell" if a1 < a0 else "rose", a0=a0, a1=a1, c0=c0, c1=c1))
 
 # %% [markdown]
 # **Your conclusion (graded by the instructor).** Should the book's CNN switch to circular padding?
@@ -406,10 +415,13 @@ else:
 # need to see before switching.
 
 # %% [markdown answer ex05-2 2]
-# *Model answer.* Compare the two rows column by column. Circular padding removes the seam, so the
-# estimator's distance from the 180° symmetry should fall, while the correlations with the exact
-# features should stay about where they were (the seam touches only the columns next to it). One
-# short training per variant does not separate a small difference from training noise: the same
+# *Model answer.* Compare the two rows column by column, as the reading under the table does (it is
+# computed from the run, so it says which way this run went). Circular padding removes the seam
+# from the convolutions only: the fully connected layers still weigh each column differently, so a
+# turned world is not seen as its mirror image by construction, and the distance from the symmetry
+# can move either way in one short training; the correlations move little, since the seam touches
+# only the columns next to it. One short training per variant does not separate a small difference
+# from training noise: the same
 # estimator trained with another seed moves these numbers too, so a fair comparison repeats each
 # variant over a few seeds (and at the full length of stage 1) and switches only if circular
 # padding is better on average by more than the spread between seeds. It costs nothing at run time
