@@ -60,10 +60,16 @@ def test_relative_cost_uses_the_same_initial_conditions_for_a_seed():
 def test_checks_pass_the_library_and_fail_wrong_answers_without_raising(capsys):
     from vgai_lite.config import FlockConfig as C
 
-    assert check_potential_gradient(lambda r_ij, rho: potential_gradient(r_ij, C(rho=rho)))
-    wrong_sign = check_potential_gradient(lambda r_ij, rho: -potential_gradient(r_ij, C(rho=rho)))
+    def grad(r_ij, rho):  # the paper's potential, written out: the library's own is refused as an answer
+        d2 = r_ij.square().sum(-1, keepdim=True).clamp(min=1e-6)
+        return torch.where(d2 <= rho ** 2, -2 * r_ij * (1 / d2 ** 2 + 1 / d2), torch.zeros_like(r_ij))
+
+    r = torch.randn(40, 2, dtype=torch.float64) * 0.4
+    torch.testing.assert_close(grad(r, 0.5), potential_gradient(r, C(rho=0.5)))  # it is the library's
+    assert check_potential_gradient(grad)
+    wrong_sign = check_potential_gradient(lambda r_ij, rho: -grad(r_ij, rho))
     assert not wrong_sign and "sign" in wrong_sign.message
-    no_cutoff = check_potential_gradient(lambda r_ij, rho: potential_gradient(r_ij, C(rho=100.0)))
+    no_cutoff = check_potential_gradient(lambda r_ij, rho: grad(r_ij, 100.0))
     assert not no_cutoff and "rho" in no_cutoff.message
 
     def crashes(r_ij, rho):
@@ -76,8 +82,13 @@ def test_checks_pass_the_library_and_fail_wrong_answers_without_raising(capsys):
         raise NotImplementedError
 
     assert "not implemented" in check_potential_gradient(unfinished).message
-    assert check_flocking_cost(flocking_cost)
-    avg = check_flocking_cost(lambda v: flocking_cost(v) / v.shape[0])
+    def cost(v):  # eq. 1 written out
+        return (v - v.mean(2, keepdim=True)).square().sum(-1).mean(-1).sum(0)
+
+    v = torch.randn(5, 3, 7, 2, dtype=torch.float64)
+    torch.testing.assert_close(cost(v), flocking_cost(v))
+    assert check_flocking_cost(cost)
+    avg = check_flocking_cost(lambda v: cost(v) / v.shape[0])
     assert not avg and "sum over time" in avg.message
     out = capsys.readouterr().out
     assert "PASSED" in out and "NOT PASSED" in out
@@ -97,11 +108,19 @@ def test_quick_mode_is_read_from_one_environment_variable(monkeypatch):
     importlib.reload(book)
 
 
+def _copy(f):
+    """A function object with the library function's code: the checks refuse the library's own objects."""
+    import types
+
+    return types.FunctionType(f.__code__, f.__globals__, f"copy_of_{f.__name__}", f.__defaults__, f.__closure__)
+
+
 def test_aggregation_and_feature_checks_pass_the_library_and_catch_mistakes():
     from vgai_lite.aggregation import aggregation_sequence
     from vgai_lite.lab.exercises import check_aggregation_sequence, check_local_features
     from vgai_lite.features import local_features
 
+    aggregation_sequence, local_features = _copy(aggregation_sequence), _copy(local_features)  # not the forbidden objects
     assert check_aggregation_sequence(lambda X, S, K: aggregation_sequence(X[None], S[None], K)[0, -1])
 
     def static_graph(X, S, K):  # uses S(t)^k: forgets that the graph moves

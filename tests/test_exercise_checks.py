@@ -701,7 +701,7 @@ def est_loop_float32(X, head, x, mean, std):
 
 @pytest.mark.parametrize("answer", [est_right, est_loop_float32])
 def test_05_3_passes_correct_answers(answer):
-    from vgai_lite.lab.method_exercises import check_estimation_loss
+    from vgai_lite.lab.training_exercises import check_estimation_loss
 
     assert all(passes(check_estimation_loss, answer))
 
@@ -715,13 +715,13 @@ def test_05_3_passes_correct_answers(answer):
     (lambda X, h, x, m, s: nnf.l1_loss(h(X), (x - m) / s.mean()), "one spread for all"),
 ])
 def test_05_3_rejects_wrong_answers(answer, why):
-    from vgai_lite.lab.method_exercises import check_estimation_loss
+    from vgai_lite.lab.training_exercises import check_estimation_loss
 
     assert not any(passes(check_estimation_loss, answer)), why
 
 
 def test_05_3_rejects_the_librarys_loss():
-    from vgai_lite.lab.method_exercises import check_estimation_loss
+    from vgai_lite.lab.training_exercises import check_estimation_loss
     from vgai_lite.vgai_training import estimation_loss
 
     def via_library(X, head, x, mean, std):
@@ -746,7 +746,7 @@ def lose_bernoulli(A, p, generator):
 
 @pytest.mark.parametrize("answer", [lose_right, lose_bernoulli])
 def test_08_1_passes_correct_answers(answer):
-    from vgai_lite.lab.method_exercises import check_lost_messages
+    from vgai_lite.lab.training_exercises import check_lost_messages
 
     assert all(passes(check_lost_messages, answer))
 
@@ -770,7 +770,7 @@ def _lose_in_place(A, p, generator):
     (lambda A, p, g: A * (1 - p), "expected value, not a draw"),
 ])
 def test_08_1_rejects_wrong_answers(answer, why):
-    from vgai_lite.lab.method_exercises import check_lost_messages
+    from vgai_lite.lab.training_exercises import check_lost_messages
 
     assert not any(passes(check_lost_messages, answer)), why
 
@@ -818,7 +818,7 @@ def dagger_loop_with_library_coin(learner, fit, expert, step, starts, steps, p, 
 
 @pytest.mark.parametrize("answer", [dagger_loop, dagger_loop_with_library_coin])
 def test_03_3_passes_correct_answers(answer):
-    from vgai_lite.lab.method_exercises import check_dagger_training
+    from vgai_lite.lab.training_exercises import check_dagger_training
 
     assert all(passes(check_dagger_training, answer))
 
@@ -833,7 +833,7 @@ def test_03_3_passes_correct_answers(answer):
     ({"flip": True}, "p for the expert"),
 ])
 def test_03_3_rejects_wrong_answers(kwargs, why):
-    from vgai_lite.lab.method_exercises import check_dagger_training
+    from vgai_lite.lab.training_exercises import check_dagger_training
 
     answer = lambda *args: dagger_loop(*args, **kwargs)
     assert not any(passes(check_dagger_training, answer)), why
@@ -841,7 +841,7 @@ def test_03_3_rejects_wrong_answers(kwargs, why):
 
 def test_03_3_rejects_a_loop_that_never_fits_and_the_librarys_training():
     from vgai_lite.dagnn_training import train_dagnn
-    from vgai_lite.lab.method_exercises import check_dagger_training
+    from vgai_lite.lab.training_exercises import check_dagger_training
 
     never = lambda learner, fit, expert, step, starts, steps, p, g: {"r": [], "v": [], "u": []}
     assert not check_dagger_training(never)

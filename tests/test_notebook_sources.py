@@ -65,6 +65,9 @@ DEFINED_NUMBERS = {
     "190": "a step late in a 200-step episode",
     "1.96": "the normal quantile of a two-sided 95 % interval",
     "10,000": "the random starts of the NaN property test (tests/test_numerical_safety.py)",
+    "255": "10/255, the authors' test noise on 8-bit pixel values",
+    "144": "the paper's camera rows (144 x 256 pixels)",
+    "256": "the paper's camera columns (144 x 256 pixels)",
 }
 
 
@@ -113,6 +116,7 @@ def undefined_numbers(markdown: str, allowed: set) -> list:
 
     text = re.sub(r"`[^`]*`", " ", markdown)                 # code: literals of the code it shows
     text = re.sub(r"\]\([^)]*\)", "]", text)                  # link targets
+    text = re.sub(r"(?m)^#+\s*\d+\.", " ", text)              # a heading's section number
     text = re.sub(r"(?i)arXiv:\S+", " ", text)                  # references
     text = re.sub(r"(?i)(?:\beqs?\.|\bequations?|\bsections?|§|\btables?|\bfig(?:ure)?s?\.?|\bexercises?|"
                   r"\bnotebooks?)\s*[\d.,\-–ab ]+(?:and [\d.]+)?", " ", text)  # references

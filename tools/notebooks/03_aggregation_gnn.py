@@ -19,8 +19,9 @@
 # and of the GSO on the relative cost.
 #
 # **You implement** the six local features a drone measures from its neighbours (exercise 03.1), one
-# DAgger round's data aggregation (exercise 03.2) and DAgger's training loop (exercise 03.3); an
-# automatic check tells you at once whether each is right, and the last cell gives your score.
+# DAgger round's data aggregation (exercise 03.2) and DAgger's training loop (exercise 03.3), and run
+# an open-ended ablation whose conclusion you write (exercise 03.4); an automatic check tells you at
+# once whether your code is right, and the last cell gives your score.
 
 # %%
 import time
@@ -440,9 +441,51 @@ def my_dagger(learner, fit, expert, step, starts, steps, p, generator):
     ### END SOLUTION
 
 # %% [check ex03-3]
-from vgai_lite.lab.method_exercises import check_dagger_training
+from vgai_lite.lab.training_exercises import check_dagger_training
 
 assert check_dagger_training(my_dagger)
+
+# %% [markdown]
+# ## 14. Exercise 03.4, an open-ended ablation: does DAgger help this learner?
+#
+# Section 7 compared the shipped DAGNNs trained with and without DAgger. Run the ablation yourself,
+# small enough to take seconds: the same training of a DAGNN for a team of 20 with DAgger's mixture
+# (p = 0.33) and without it (p = 0, behaviour cloning on the expert's flights only), each from two
+# training seeds, each scored on the validation episodes (a comparison is a choice). Change what you
+# like (more seeds, more rounds, p = 1) and look at the spread between the seeds of one row before
+# you read a difference between rows.
+
+# %%
+from vgai_lite import DAGNNTrainConfig, train_dagnn
+from vgai_lite.book import VALIDATION_SEED
+
+small = cfg.replace(N=20, T=pick(100, 20))
+ablation = {}
+for label, p_mix in (("DAgger, p = 0.33", 0.33), ("behaviour cloning, p = 0", 0.0)):
+    for seed in range(2):
+        tc = DAGNNTrainConfig(rounds=pick(4, 2), episodes_per_round=pick(10, 2), epochs_per_round=pick(3, 1),
+                              p_learner=p_mix, seed=seed)
+        learner_small, _ = train_dagnn(small, tc, progress=False, check_episodes=1)
+        ablation.setdefault(label, []).append(relative_cost(learner_small, small, episodes=pick(20, 2), seed=VALIDATION_SEED))
+display(Markdown("| training | seed 0 | seed 1 | spread between the seeds |\n|---|---|---|---|\n" + "\n".join(
+    f"| {label} | " + " | ".join(f"{r.mean_ratio:.2f} ({r.mean_ratio_ci[0]:.2f}-{r.mean_ratio_ci[1]:.2f})" for r in rs)
+    + f" | {abs(rs[0].mean_ratio - rs[1].mean_ratio):.2f} |" for label, rs in ablation.items())
+    + f"\n\nRelative cost (95% CI over episodes) on {ablation[label][0].episodes} validation episodes, "
+      f"N = {small.N}, episodes of {small.T} steps."))
+
+# %% [markdown]
+# **Your conclusion (graded by the instructor).** Does DAgger help this learner, on this evidence?
+# Say which differences you read as real and why (intervals, seeds), what would change your answer,
+# and how this small ablation relates to section 7's finding for the shipped DAGNNs.
+
+# %% [markdown answer ex03-4 2]
+# *Model answer.* A difference between the two rows counts only if it is larger than both the
+# episode intervals and the spread between the two seeds of each row; with two seeds that spread is
+# itself a rough estimate, so a small gap is "cannot tell", whichever way it points. DAgger earns its
+# keep when the learner's own mistakes lead it to states the expert's flights never visit; a linear
+# enough task, a learner that imitates well, or few rounds leave little for it to add, which is what
+# section 7 found for the shipped DAGNNs. More seeds, longer flights (where drift accumulates) or a
+# weaker learner would be the runs that could change the answer.
 
 # %% [markdown]
 # ## Key takeaways

@@ -451,7 +451,7 @@ def my_estimation_loss(X, head, x_exact, mean, std):
 
 
 # %% [check ex05-3]
-from vgai_lite.lab.method_exercises import check_estimation_loss
+from vgai_lite.lab.training_exercises import check_estimation_loss
 
 assert check_estimation_loss(my_estimation_loss)
 

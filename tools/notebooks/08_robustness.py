@@ -540,7 +540,7 @@ def my_lost_messages(A, p, generator):
 
 
 # %% [check ex08-1]
-from vgai_lite.lab.method_exercises import check_lost_messages
+from vgai_lite.lab.training_exercises import check_lost_messages
 
 assert check_lost_messages(my_lost_messages)
 

@@ -19,11 +19,12 @@ import torch
 
 from ..aggregation import AggregationBuffer, aggregation_sequence
 from ..config import FlockConfig
-from ..controllers import potential_gradient, repulsion_weight
+from ..controllers import potential_gradient
 from ..features import local_features
 from ..flocking import flocking_cost, velocity_variance
 from ..graphs import adjacency, gso
 from ..render import RenderConfig, bearing_to_column
+from .library_guard import LIBRARY_CALL, guarded
 
 
 @dataclass
@@ -79,8 +80,9 @@ EXERCISES: dict[str, str] = {
     "08.1": "lost messages, as a drone meets them",
 }
 """Every graded exercise of the book: id ("NN.k", NN = the notebook's number) -> what is implemented.
-The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 03.3, 05.1, 05.3, 06.1, 06.2, 08.1) in
-``method_exercises``; the open-ended experiments (05.2, 06.3, 07.1) have theirs in
+The checks of 01.x-04.1 are here; those of the method's core (02.2, 03.2, 05.1, 06.1, 06.2) in
+``method_exercises``, those that reach training and perturbed worlds (03.3, 05.3, 08.1) in
+``training_exercises``; the open-ended experiments (05.2, 06.3, 07.1) have theirs in
 ``experiment_exercises``: the check grades the tool the student writes; the experiment done with it
 is the student's."""
 
@@ -117,53 +119,6 @@ def score(notebook: str) -> None:
         print(f"  {k} {EXERCISES[k]:45s} {state}")
     total = sum(passed.values())
     print(f"Score for notebook {notebook}: {total}/{len(ids)}")
-
-
-LIBRARY_CALL = "vgai-lite library call: "
-"""The message of the error a library function raises while it is forbidden (``without_library``)."""
-
-
-def _forbidden_code(func: Callable):
-    """A code object that raises, naming ``func``, whatever it is called with (no free variables, builtins
-    only, so that it can stand in ``func.__code__`` inside ``func``'s own module)."""
-    qualified = f"{func.__module__}.{func.__qualname__}"
-    free = func.__code__.co_freevars  # e.g. __class__ of a method that calls super(): as many, as the slot needs
-    source = ("def outer():\n" + "".join(f"    {v} = None\n" for v in free)
-              + f"    def {func.__name__}(*args, **kwargs):\n"
-              + (f"        {', '.join(free)}\n" if free else "")
-              + f"        raise PermissionError({LIBRARY_CALL + qualified!r})\n"
-              + f"    return {func.__name__}\n")
-    namespace: dict = {}
-    exec(source, namespace)
-    return namespace["outer"]().__code__
-
-
-class without_library:
-    """While active, the library's own implementations ``funcs`` raise when called, however they are
-    reached (under an alias, as ``vl.name`` or ``module.name``, from a subclass): the very function
-    objects are changed, not the names. The checks run the student's answer inside it, so that an
-    answer that calls what the exercise asks to write is told so; every other library function works."""
-
-    def __init__(self, *funcs: Callable):
-        self.funcs = funcs
-
-    def __enter__(self):
-        self.saved = [(f, f.__code__) for f in self.funcs]
-        for f in self.funcs:
-            f.__code__ = _forbidden_code(f)
-        return self
-
-    def __exit__(self, *exc):
-        for f, code in self.saved:
-            f.__code__ = code
-
-
-def guarded(student_fn: Callable, *library: Callable) -> Callable:
-    """``student_fn`` run ``without_library(*library)`` at every call."""
-    def call(*args, **kwargs):
-        with without_library(*library):
-            return student_fn(*args, **kwargs)
-    return call
 
 
 def _run(exercise: str, body: Callable[[], tuple[bool, str]]) -> CheckResult:
@@ -203,7 +158,7 @@ def check_potential_gradient(student_fn: Callable) -> CheckResult:
 
     U is the paper's potential (eq. 3): 1/||r||^2 - log ||r||^2 inside rho, constant outside.
     """
-    student_fn = guarded(student_fn, potential_gradient, repulsion_weight)  # the library's own answer does not count
+    student_fn = guarded(student_fn, potential_gradient)  # the library's own answer does not count
     def body():
         g = _fresh_generator()
         # rho <= 0.8 and distances on a jittered grid from 0.1 rho to 1.5 rho: every run has offsets

@@ -16,7 +16,8 @@ from typing import Callable
 import torch
 
 from ..flocking import velocity_variance
-from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run, guarded
+from .exercises import AnswerMismatch, CheckResult, _as_tensor, _close, _fresh_generator, _run
+from .library_guard import guarded
 
 
 def check_circular_conv(student_cls: Callable) -> CheckResult:
