@@ -126,8 +126,9 @@ def test_every_committed_notebook_shows_full_marks_in_its_score_cell(path):
 
 @pytest.mark.slow
 def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
-    """Under nbval with the repository's conftest, a score cell whose committed output says 1/1 fails
-    when the check did not pass (here: it never ran), and passes when its output is what it prints."""
+    """Under nbval, a score cell tagged as the builder tags it (``nbval-check-output``) whose committed
+    output says full marks fails when the check did not pass (here: it never ran), and passes when its
+    output is what it prints. The committed notebooks' score cells carry the tag."""
     import os
     import subprocess
     import sys
@@ -136,6 +137,7 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
         ids = exercises_of("02")
         nb = nbformat.v4.new_notebook()
         cell = nbformat.v4.new_code_cell('from vgai_lite.lab.exercises import score\n\nscore("02");', execution_count=1)
+        cell.metadata["tags"] = ["nbval-check-output"]
         listing = "".join(f"  {k} {EXERCISES[k]:45s} {state}\n" for k in ids)
         cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=(
             f"{listing}Score for notebook 02: {points}/{len(ids)}\n"))]
@@ -154,6 +156,9 @@ def test_nbval_compares_the_score_cell_so_a_failing_solution_fails(tmp_path):
     assert f"ook 02: 0/{len(exercises_of('02'))}" in full_marks.stdout, full_marks.stdout[-2000:]
     as_printed = probe("NOT RUN", 0)
     assert as_printed.returncode == 0 and "1 passed" in as_printed.stdout, as_printed.stdout[-2000:]
+    for path in GRADED:
+        last = [c for c in nbformat.read(path, as_version=4).cells if c.cell_type == "code"][-1]
+        assert is_score_cell(last.source) and last.metadata.get("tags") == ["nbval-check-output"], path.name
 
 
 @pytest.mark.slow
