@@ -9,7 +9,9 @@ is the baseline the batched torch simulator is compared against on the same mach
 from __future__ import annotations
 
 import dataclasses
+import json
 import time
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -23,7 +25,7 @@ from ..imitation import ROUND_CHECK_SEED_OFFSET, EpisodeStore
 from ..learned_controllers import VGAIController
 from ..physics import raycast_depth
 from ..render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
-from ..vgai_config import BOOK
+from ..vgai_config import BOOK, VGAITrainConfig
 from ..vgai_training import fit_state_estimator, joint_loss, sample_windows, window_batch
 
 
@@ -104,11 +106,11 @@ def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=N
     return rows
 
 
-def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
+def run_vgai_training(steps: int = 30, episodes: int = 4, tcfg=None) -> dict:
     """Seconds per gradient step of VGAI's stage 1 (visual state estimation) and stage 3 (joint
     K-step BPTT), and per evaluation episode, at the book's VGAI (``BOOK``); projects the time of
     a full default training from them (flight collection and round checks included)."""
-    cfg, tcfg = FlockConfig(), BOOK
+    cfg, tcfg = FlockConfig(), tcfg or BOOK
     gen = torch.Generator().manual_seed(0)
     r0, v0 = sample_initial_state(cfg, episodes, gen)
     start = time.perf_counter()
@@ -122,13 +124,21 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     stage1 = (time.perf_counter() - start) / steps
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
     model.train()
-    start = time.perf_counter()
+    parts = {"render": 0.0, "forward": 0.0, "backward": 0.0}  # where a joint step's time goes
     for _ in range(steps):
-        loss = joint_loss(model, tcfg, window_batch(cfg, tcfg, r, v, u, *sample_windows(r.shape[0], r.shape[1], tcfg, gen)))
+        t0 = time.perf_counter()
+        batch = window_batch(cfg, tcfg, r, v, u, *sample_windows(r.shape[0], r.shape[1], tcfg, gen))
+        t1 = time.perf_counter()
+        loss = joint_loss(model, tcfg, batch)
+        t2 = time.perf_counter()
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
-    stage3 = (time.perf_counter() - start) / steps
+        t3 = time.perf_counter()
+        parts["render"] += t1 - t0
+        parts["forward"] += t2 - t1
+        parts["backward"] += t3 - t2
+    stage3 = sum(parts.values()) / steps
     model.eval()
     learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
     start = time.perf_counter()
@@ -137,16 +147,23 @@ def run_vgai_training(steps: int = 30, episodes: int = 4) -> dict:
     flights = tcfg.expert_episodes * collect_expert + tcfg.dagger_rounds * tcfg.episodes_per_round * episode
     checks = (tcfg.dagger_rounds + 1) * 10 * episode
     projected = tcfg.warm_steps * stage1 + tcfg.dagger_rounds * tcfg.joint_steps * stage3 + flights + checks
-    return {"stage1_step_s": stage1, "joint_step_s": stage3, "eval_episode_s": episode,
+    return {"stage1_step_s": stage1, "joint_step_s": stage3, **{f"joint_{k}_s": x / steps for k, x in parts.items()},
+            "eval_episode_s": episode,
             "expert_episode_s": collect_expert, "projected_training_s": projected}
 
 
 def main(args=None) -> None:
     if args is not None and getattr(args, "vgai", False):
-        out = run_vgai_training()
-        print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, the book's VGAI (BOOK)")
+        recipe, label = BOOK, "the book's VGAI (BOOK)"
+        if getattr(args, "train_config", None):  # a training record's configuration, e.g. one through a camera
+            recipe = VGAITrainConfig.from_dict(json.loads(Path(args.train_config).read_text())["train_config"])
+            label = f"the training of {args.train_config}"
+        out = run_vgai_training(tcfg=recipe)
+        print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {label}")
         print(f"stage 1 step (8 swarm states x 50 images): {out['stage1_step_s']:.3f} s")
-        print(f"joint BPTT step (4 windows x 4 steps x 50 images): {out['joint_step_s']:.3f} s")
+        print(f"joint BPTT step (4 windows x 4 steps x 50 images): {out['joint_step_s']:.3f} s: rendering and "
+              f"cameras {out['joint_render_s']:.3f}, forward {out['joint_forward_s']:.3f}, backward and Adam "
+              f"{out['joint_backward_s']:.3f}")
         print(f"one evaluation episode (VGAI + expert, 200 steps, N = 50): {out['eval_episode_s']:.2f} s")
         print(f"projected default training (3,000 + 4 x 600 steps, flights, validation): "
               f"{out['projected_training_s'] / 60:.1f} min")
