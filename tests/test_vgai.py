@@ -76,20 +76,18 @@ def test_prehistory_frames_are_the_initial_state_flown_backwards():
 
 def test_the_controller_and_the_bptt_window_compute_the_same_actions():
     """One pipeline: along a flight, the controller's action at step t (step by step, its own frame
-    memory and aggregation buffer) is the window form's action at t (stored flight, unrolled eq. 6),
-    the form K-step BPTT differentiates."""
+    memory and aggregation buffer) is the action the training's window of t gives (``window_batch``,
+    stored flight, unrolled eq. 6), the form K-step BPTT differentiates."""
     c = make_vgai(K=3)
     cfg = CFG.replace(T=9)
     r0, v0 = sample_initial_state(cfg, 2, torch.Generator().manual_seed(4), dtype=torch.float64)
     traj = rollout(c, cfg, r0, v0)
-    K, t = 3, torch.tensor([1, 8])  # a window that starts before t = 0, and one inside the flight
-    e = torch.tensor([0, 1])
-    tau = t[:, None] - (K - 1) + torch.arange(K)
-    valid = (tau >= 0).double()[:, :, None, None]
-    tau_c, ee = tau.clamp(min=0).flatten(), e[:, None].expand_as(tau).flatten()
-    X = c.model.features(stored_images(VISION, cfg, traj.r, traj.v, ee, tau_c)).view(2, K, cfg.N, -1) * valid
-    S = gso(adjacency(traj.r[tau_c, ee], cfg.R)).view(2, K, cfg.N, cfg.N) * valid
-    u_window = c.model.mlp(aggregation_sequence(X, S, K)[:, -1])
+    tcfg = VGAITrainConfig(F=6, K=3, vision=VISION)
+    t, e = torch.tensor([1, 8]), torch.tensor([0, 1])  # a window that starts before t = 0, and one inside the flight
+    w = window_batch(cfg, tcfg, traj.r, traj.v, traj.u, e, t)
+    mask = w["valid"].double()[:, :, None, None]
+    X = c.model.cnn(w["images"].flatten(0, 2)).view(2, 3, cfg.N, -1) * mask
+    u_window = c.model.mlp(aggregation_sequence(X, w["S"] * mask, 3)[:, -1])
     torch.testing.assert_close(saturate(u_window, cfg), traj.u[t, e])
 
 

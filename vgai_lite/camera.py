@@ -9,8 +9,10 @@ with G_b a Gaussian blur (the lens's point-spread function) of standard deviatio
 degrees of view, so that a setting means the same at every resolution: a column of the panorama is
 90° / view_width wide, a row vertical_fov_deg / view_height tall. A dead camera shows 0 on its
 quarter of the panorama. The noise of a frame is drawn from a generator seeded by the frame's time,
-so that the frame a drone took at t - g, paired with the one of t (``vision``), is the very frame it
-saw then, noise included, and noise is independent between frames.
+so that in flight the frame a drone took at t - g, paired with the one of t (``vision``), is the very
+frame it saw then, noise included, and noise is independent between frames. (A training window's
+frames, its K steps and the frames g >= K steps before them, are all different frames: each draws
+its own noise.)
 
 The paper's authors test their VGAI with noise of sigma = 10/255 and a 5 x 5 box blur at 144 x 256
 (about 0.5° of view); the book's training draws these settings per flight (``CameraRanges``, domain

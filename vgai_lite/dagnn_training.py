@@ -28,7 +28,7 @@ from .models import AggregationMLP
 @dataclass(frozen=True)
 class DAGNNTrainConfig:
     """Everything that defines a DAGNN training run (the paper gives only the loss, optimiser,
-    learning rate and DAgger probability; the rest is ours, chosen to train in minutes on 2 cores).
+    learning rate and DAgger probability; the rest is ours, sized for two CPU cores).
 
     Attributes:
         K: taps (K - 1 exchanges; the paper's default K - 1 = 3).

@@ -91,8 +91,9 @@ class RelativeCost:
         median_ratio: median over episodes of cost / expert_cost.
         ratio_quartiles: 25th and 75th percentiles of the per-episode ratios.
         mean_ratio_ci: 95 % bootstrap interval of ``mean_ratio`` over episodes (2,000 resamples).
-        flocking: did it flock (velocity variance at ``FLOCK_TIMES``, groups at the last of them);
-            None when evaluated without (``flock_times=()``).
+        flocking: the flocking figures (velocity variance at ``FLOCK_TIMES``, groups at the last of
+            them; whether they count as flocked is ``flocked(summary())``); None when evaluated without
+            (``flock_times=()``).
     """
 
     name: str

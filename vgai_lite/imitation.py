@@ -128,9 +128,8 @@ def round_check(learner, cfg: FlockConfig, episodes: int, seed: int, device=None
 def load_or_train(path: Union[str, Path], cfg: FlockConfig, tcfg, train: Callable, retrain: bool = False,
                   **train_kwargs):
     """Load the controller at ``path`` if it was trained, to the end, with exactly ``cfg`` and
-    ``tcfg``; otherwise ``train(cfg, tcfg, checkpoint=path, **train_kwargs)`` (``train_dagnn``: a
-    minute or so; ``train_vgai``: most of an hour, its records in ``data/vgai/`` say how long each
-    took), which saves it there.
+    ``tcfg``; otherwise ``train(cfg, tcfg, checkpoint=path, **train_kwargs)``, which saves it there
+    (how long a training takes: its record in ``data/``, ``lab.runs.training_minutes``).
 
     Returns (controller, whether it was trained now); the training record is in ``controller.meta``.
     """

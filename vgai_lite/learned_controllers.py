@@ -154,7 +154,7 @@ class VGAIController(_Learned):
     def features(self, r: torch.Tensor, r_before: torch.Tensor, camera=None) -> torch.Tensor:
         """X(t), (B, N, F), from the agents' images of the positions now and g steps before (pure: the
         frame memory is not touched). ``camera(frame, lag)``: what the cameras do to each raw frame
-        before the CNN sees it (``vision.camera_input``); None: the training's cameras."""
+        before the CNN sees it (``vision.camera_input``); None: the renderer's frames as they are."""
         check_state(r)
         return self.model.features(camera_input(self.vision, self.cfg, r, r_before, camera))
 

@@ -12,7 +12,7 @@ import torch
 
 from .config import FlockConfig
 from .controllers import ExpertController
-from .features import local_features
+from .features import N_LOCAL_FEATURES, local_features
 from .flocking import rollout, sample_initial_state
 from .imitation import EpisodeStore
 from .models import VisualCNN
@@ -36,7 +36,7 @@ def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, ep
         e, tt = torch.arange(episodes), torch.full((episodes,), t)
         pred = cnn.aux_standardized(cnn(stored_images(vision, cfg, traj.r, traj.v, e, tt).flatten(0, 1)))
         X = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
-        out[t] = [torch.corrcoef(torch.stack((pred[:, k], X[:, k])))[0, 1].item() for k in range(6)]
+        out[t] = [torch.corrcoef(torch.stack((pred[:, k], X[:, k])))[0, 1].item() for k in range(N_LOCAL_FEATURES)]
     return out
 
 

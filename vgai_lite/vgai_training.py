@@ -8,8 +8,8 @@ agent's K images go through the CNN, the features travel through the delayed agg
 the MLP acts once at the last step, and the L1 loss of eq. 10 against the expert's action flows back
 through all K CNN passes (``bptt_loss``).
 
-The paper is silent on how long to train and on warm starts. Ours, in three stages, to train in
-minutes on two CPU cores (``train_vgai``, at the bottom of this file):
+The paper is silent on how long to train and on warm starts. Ours, in three stages, sized for two
+CPU cores (``train_vgai``, at the bottom of this file; each record in ``data/`` says how long it took):
   0. the expert flies ``expert_episodes`` swarms alone (DAgger's round 0, ``imitation.EpisodeStore``);
   1. visual state estimation (``fit_state_estimator``): the CNN, through a linear head, regresses the
      DAGNN's N_LOCAL_FEATURES = 6 exact local features from single agents' images;
@@ -169,7 +169,7 @@ def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.
 
 
 def bptt_loss(model, images: torch.Tensor, S: torch.Tensor, u_star: torch.Tensor,
-              valid: Optional[torch.Tensor] = None) -> torch.Tensor:
+              valid: Optional[torch.Tensor] = None, also: Optional[Callable] = None) -> torch.Tensor:
     """Eq. 10 through the paper's figure 3: the L1 imitation loss of M windows of K steps.
 
     images (M, K, N, ...): every agent's CNN input at the window's K steps, oldest first;
@@ -182,8 +182,12 @@ def bptt_loss(model, images: torch.Tensor, S: torch.Tensor, u_star: torch.Tensor
         Z(t)   = [X(t), S(t) X(t-1), ..., S(t)...S(t-K+2) X(t-K+1)]   (eq. 6, unrolled),
         loss   = mean |NN_Theta(Z(t)) - u*(t)|                          (eq. 10).
 
-    ``loss.backward()`` is K-step BPTT: through the MLP once and through the CNN at all K steps."""
-    return window_action_loss(model.mlp, window_features(model.cnn, images), S, u_star, valid)
+    ``loss.backward()`` is K-step BPTT: through the MLP once and through the CNN at all K steps.
+    ``also(X)``, optional: a term of the same features X (M, K, N, F) added to the loss, so that the
+    CNN runs once for both (the book's recipe adds stage 1's state-estimation loss, ``joint_loss``)."""
+    X = window_features(model.cnn, images)
+    loss = window_action_loss(model.mlp, X, S, u_star, valid)
+    return loss if also is None else loss + also(X)
 
 
 def window_features(cnn, images: torch.Tensor) -> torch.Tensor:
@@ -228,14 +232,10 @@ def window_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: to
 
 def joint_loss(model: VGAIModel, tcfg: VGAITrainConfig, w: dict) -> torch.Tensor:
     """The loss of one joint step on a ``window_batch`` w: ``bptt_loss`` (eq. 10), plus, with
-    ``tcfg.aux_weight`` > 0, that times stage 1's ``estimation_loss`` on the same images (so that joint
-    training keeps the CNN's features readable as the local features; the book's recipe). The CNN
-    runs once: both terms read the same features."""
-    X = window_features(model.cnn, w["images"])
-    loss = window_action_loss(model.mlp, X, w["S"], w["u_star"], w["valid"])  # = bptt_loss(model, ...)
-    if tcfg.aux_weight:
-        loss = loss + tcfg.aux_weight * estimation_loss(model.cnn, X, w["x_exact"])
-    return loss
+    ``tcfg.aux_weight`` > 0, that times stage 1's ``estimation_loss`` on the same images' features (so
+    that joint training keeps the CNN's features readable as the local features; the book's recipe)."""
+    also = (lambda X: tcfg.aux_weight * estimation_loss(model.cnn, X, w["x_exact"])) if tcfg.aux_weight else None
+    return bptt_loss(model, w["images"], w["S"], w["u_star"], w["valid"], also)
 
 
 def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, tcfg: VGAITrainConfig,

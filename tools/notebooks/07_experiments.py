@@ -83,10 +83,10 @@ for inv in prov.get("invocations", []):
 #   and processes a view of all the others at every step. The headline figures of notebook 06
 #   (section 3) are the first 50 test episodes of the same seed, so a table's default cell and the
 #   headline differ only by the episodes they average.
-# * **Training seeds.** The DAGNN rows are trained with three seeds (a DAGNN trains in under a
-#   minute) and report the mean over seeds with its standard deviation; VGAI rows use one seed (a
-#   VGAI training takes tens of minutes on this machine: notebook 06's Table 1a section and notebook
-#   09 list each record's time), and notebook 06 shows how far three seeds of one configuration land.
+# * **Training seeds.** The DAGNN rows are trained with three seeds and report the mean over seeds
+#   with its standard deviation; VGAI rows use one seed (a VGAI training costs far more than a
+#   DAGNN's: notebook 06's Table 1a section and notebook 09 list each record's time), and notebook 06
+#   shows how far three seeds of one configuration land.
 # * **Tables 2a and 2b** (initial velocity, radius): the paper does not say whether it retrains. Its
 #   section is about robustness, so the rows DAGNN and VGAI are the controllers trained at the
 #   defaults ($v_{init} = 3$, $R = 1.5$) and flown in each condition; the row *DAGNN (retrained)*

@@ -9,6 +9,7 @@ is the baseline the batched torch simulator is compared against on the same mach
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import json
 import time
 from pathlib import Path
@@ -25,8 +26,9 @@ from ..imitation import ROUND_CHECK_SEED_OFFSET, EpisodeStore
 from ..learned_controllers import VGAIController
 from ..physics import raycast_depth
 from ..render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
+from ..camera import draw_camera
 from ..vgai_config import BOOK, VGAITrainConfig
-from ..vgai_training import fit_state_estimator, joint_loss, sample_windows, window_batch
+from ..vgai_training import fit_state_estimator, joint_loss, sample_windows, train_vgai, window_batch
 
 
 def _numpy_expert_step(x: np.ndarray, cfg: FlockConfig) -> np.ndarray:
@@ -106,6 +108,10 @@ def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=N
     return rows
 
 
+CHECK_EPISODES = inspect.signature(train_vgai).parameters["check_episodes"].default
+"""Episodes of each round check of a training (``train_vgai``'s default)."""
+
+
 def run_vgai_training(steps: int = 30, episodes: int = 4, tcfg=None) -> dict:
     """Seconds per gradient step of VGAI's stage 1 (visual state estimation) and stage 3 (joint
     K-step BPTT), and per evaluation episode, at the book's VGAI (``BOOK``); projects the time of
@@ -127,7 +133,9 @@ def run_vgai_training(steps: int = 30, episodes: int = 4, tcfg=None) -> dict:
     parts = {"render": 0.0, "forward": 0.0, "backward": 0.0}  # where a joint step's time goes
     for _ in range(steps):
         t0 = time.perf_counter()
-        batch = window_batch(cfg, tcfg, r, v, u, *sample_windows(r.shape[0], r.shape[1], tcfg, gen))
+        cam = draw_camera(tcfg.camera, tcfg.vision.render, tcfg.windows, cfg.N, gen)  # as joint_round draws them
+        batch = window_batch(cfg, tcfg, r, v, u, *sample_windows(r.shape[0], r.shape[1], tcfg, gen),
+                             cam.repeat(tcfg.K).at(0) if cam is not None else None)
         t1 = time.perf_counter()
         loss = joint_loss(model, tcfg, batch)
         t2 = time.perf_counter()
@@ -145,7 +153,7 @@ def run_vgai_training(steps: int = 30, episodes: int = 4, tcfg=None) -> dict:
     relative_cost(learner, cfg, episodes=episodes, seed=tcfg.seed + ROUND_CHECK_SEED_OFFSET, flock_times=())  # as a round check flies
     episode = (time.perf_counter() - start) / episodes  # the learner and the expert flying one episode
     flights = tcfg.expert_episodes * collect_expert + tcfg.dagger_rounds * tcfg.episodes_per_round * episode
-    checks = (tcfg.dagger_rounds + 1) * 10 * episode
+    checks = (tcfg.dagger_rounds + 1) * CHECK_EPISODES * episode
     projected = tcfg.warm_steps * stage1 + tcfg.dagger_rounds * tcfg.joint_steps * stage3 + flights + checks
     return {"stage1_step_s": stage1, "joint_step_s": stage3, **{f"joint_{k}_s": x / steps for k, x in parts.items()},
             "eval_episode_s": episode,
@@ -160,12 +168,13 @@ def main(args=None) -> None:
             label = f"the training of {args.train_config}"
         out = run_vgai_training(tcfg=recipe)
         print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {label}")
-        print(f"stage 1 step (8 swarm states x 50 images): {out['stage1_step_s']:.3f} s")
-        print(f"joint BPTT step (4 windows x 4 steps x 50 images): {out['joint_step_s']:.3f} s: rendering and "
-              f"cameras {out['joint_render_s']:.3f}, forward {out['joint_forward_s']:.3f}, backward and Adam "
-              f"{out['joint_backward_s']:.3f}")
-        print(f"one evaluation episode (VGAI + expert, 200 steps, N = 50): {out['eval_episode_s']:.2f} s")
-        print(f"projected default training (3,000 + 4 x 600 steps, flights, validation): "
+        t, N = recipe, FlockConfig().N
+        print(f"stage 1 step ({t.warm_states} swarm states x {N} images): {out['stage1_step_s']:.3f} s")
+        print(f"joint BPTT step ({t.windows} windows x {t.K} steps x {N} images): {out['joint_step_s']:.3f} s: "
+              f"rendering and cameras {out['joint_render_s']:.3f}, forward {out['joint_forward_s']:.3f}, "
+              f"backward and Adam {out['joint_backward_s']:.3f}")
+        print(f"one evaluation episode (VGAI + expert, 200 steps, N = {N}): {out['eval_episode_s']:.2f} s")
+        print(f"projected training ({t.warm_steps:,} + {t.dagger_rounds} x {t.joint_steps} steps, flights, round checks): "
               f"{out['projected_training_s'] / 60:.1f} min")
         return
     rows = run()

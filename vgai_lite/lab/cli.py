@@ -325,7 +325,7 @@ def main(argv=None):
     p.add_argument("names", nargs="*", help="runs to train, e.g. dagnn_K4")
     p.add_argument("--all", action="store_true", help="every run the book ships")
     p.add_argument("--retrain", action="store_true", help="train even if an up-to-date checkpoint exists")
-    p.add_argument("--episodes", type=int, default=50, help="held-out evaluation episodes")
+    p.add_argument("--episodes", type=int, default=50, help="working episodes of the record (seed book.WORKING_SEED)")
     p.add_argument("--threads", type=int, default=1, help="torch threads (run two jobs on two cores)")
     p = sub.add_parser("train-vgai", help="train (or load) the book's VGAI and state estimators, write data/vgai/")
     p.add_argument("names", nargs="*", help="VGAI runs to train, e.g. vgai_F24")
@@ -341,7 +341,7 @@ def main(argv=None):
     p.add_argument("--quick", action="store_true", help="every table in small form (tiny trainings, 2 short episodes)")
     p.add_argument("--seeds", type=int, default=None, help="training seeds of the DAGNN rows (default: ReproduceConfig's)")
     p.add_argument("--vgai-seeds", dest="vgai_seeds", type=int, default=None,
-                   help="training seeds of the VGAI rows (default: ReproduceConfig's; each is a training of most of an hour)")
+                   help="training seeds of the VGAI rows (default: ReproduceConfig's; each is a VGAI training)")
     p.add_argument("--episodes", type=int, default=None, help="test episodes per cell, N' <= 75 (default: ReproduceConfig's)")
     p.add_argument("--episodes-large", dest="episodes_large", type=int, default=None,
                    help="test episodes per cell for N' >= 100 (default: ReproduceConfig's)")

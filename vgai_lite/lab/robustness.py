@@ -71,9 +71,9 @@ class RobustnessConfig:
         perturbations: (name, sizes) pairs, each flown alone from the clean controller; sizes are the
             perturbation's parameter (p, sigma in pixel values or pixels or metres, steps of delay).
             The sweep spans p = 0 to 0.5 and sigma = 0 to 0.2 (size 0 is the clean flight); VGAI's
-            pixel-noise curve stops at 0.1 and its blur at one pixel to keep the sweep near half an
-            hour (a VGAI cell is minutes of flying on two cores; the DAGNN's position noise costs
-            seconds and goes to 0.2).
+            pixel-noise curve stops at 0.1 and its blur at one pixel to keep the sweep short (a VGAI
+            cell renders every drone's view at every step, the DAGNN's position noise does not and
+            goes to 0.2; results.json records the sweep's minutes).
         combined: perturbation sets flown together, e.g. the noise with a blur that averages it away.
         large_teams: N' flown with the clean controllers and with ``large_perturbations``.
         large_perturbations: the perturbations that hurt most at N = 50, read off its curves: pixel
@@ -82,7 +82,7 @@ class RobustnessConfig:
         episodes, episodes_large: held-out episodes per cell at N = 50 and at N' >= 100 (where a VGAI
             episode renders N'^2 views per step).
         flock_times: seconds at which "did it flock" is read at N = 50; at N' >= 100 only the paper's
-            2 s (T = 200 steps), to keep the largest VGAI flights in minutes.
+            2 s (T = 200 steps), to keep the largest VGAI flights short.
         seed: the episodes (the book's TEST_SEED, as the tables: every figure here is reported, none
             chooses anything; ``large_perturbations`` and the sizes were read off an earlier sweep on
             WORKING_SEED's episodes); the perturbations' draws use it too.

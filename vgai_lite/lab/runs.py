@@ -141,7 +141,7 @@ def _book_model(name: str, runs: dict, folder: str, train, retrain: bool, episod
 def book_dagnn(name: str, retrain: bool = False, episodes: int = 50, progress: bool = True,
                write_json: bool = False):
     """Load (or train: its record in data/dagnn/ says how long) the book's DAGNN ``name`` and evaluate it on ``episodes``
-    held-out episodes (seed WORKING_SEED). Returns (controller, RelativeCost)."""
+    working episodes (seed WORKING_SEED). Returns (controller, RelativeCost)."""
     return _book_model(name, DAGNN_RUNS, "dagnn", train_dagnn, retrain, episodes, progress, write_json,
                        lambda hist: {"round_checks": hist["rounds"]})
 
