@@ -174,6 +174,9 @@ def test_the_model_answers_claims_match_the_outputs_they_discuss():
     assert reading, "07.1's experiment printed no reading"
     if "even the DAGNN" in md07 and "levels off" in md07:
         assert "DAGNN levels off" in reading[0], reading[0]
+    out06, md06 = outputs("06_vgai_joint_training.ipynb")
+    reading = [line for line in out06.splitlines() if line.startswith("Read off this run")]
+    assert reading and ("shrink" not in md06 or "size fell" in reading[0]), reading
     out05, md05 = outputs("05_visual_state_cnn.ipynb")
     assert any(line.startswith("Read off this run") for line in out05.splitlines())
     assert "should fall" not in md05 and "should rise" not in md05

@@ -47,7 +47,12 @@ ROWS = [("Centralized expert", "everyone's positions and velocities", None, 1.0,
         ("VGAI, F = 24, K-1 = 3 (the book's recipe)", "its own images, neighbours' messages", "vgai_F24",
          PAPER["R"]["VGAI"][1.5], f"{(vgai_t.K - 1) * vgai_t.F * 4}", f"{vgai_minutes:.0f}"),
         ("VGAI without the learner flying alone", "the same", "vgai_F24_mixture", None,
-         f"{(vgai_t.K - 1) * vgai_t.F * 4}", "—")]
+         f"{(vgai_t.K - 1) * vgai_t.F * 4}", "—"),
+        ("VGAI trained through the camera, gray + depth", "its own camera frames, neighbours' messages", "vgai_camera",
+         None, f"{(vgai_t.K - 1) * vgai_t.F * 4}", f"{training_minutes(load('experiments/vgai_camera.json')):.0f}"),
+        ("VGAI trained through the camera, gray only (the paper's sensor)", "its own gray frames, neighbours' messages",
+         "vgai_camera_gray", PAPER["R"]["VGAI"][1.5], f"{(vgai_t.K - 1) * vgai_t.F * 4}",
+         f"{training_minutes(load('experiments/vgai_camera_gray.json')):.0f}")]
 test = {name: load(f"test/{name}.json") for _, _, name, *_ in ROWS if name}
 rows = []
 for label, sees, name, paper, nbytes, minutes in ROWS:
