@@ -38,6 +38,13 @@ def degrees_per_pixel(render: RenderConfig) -> tuple[float, float]:
     return 90.0 / render.view_width, render.vertical_fov_deg / render.view_height
 
 
+def _per_swarm(x, img: torch.Tensor, trailing: int) -> torch.Tensor:
+    """A setting, a number or one per swarm (B,), as a tensor that broadcasts over ``trailing`` more
+    dimensions of frames ``img`` (B, ...)."""
+    x = torch.as_tensor(x, dtype=img.dtype)
+    return x.view(-1, *([1] * trailing)).to(img.device) if x.dim() else x
+
+
 def _gaussian_kernels(sigma_px: torch.Tensor, half: int, dtype) -> torch.Tensor:
     """Normalised 1-D Gaussian kernels (G, 2 half + 1), one per standard deviation (pixels) in sigma_px
     (G,); a standard deviation of 0 gives the identity (a delta)."""
@@ -72,27 +79,23 @@ def blur_degrees(img: torch.Tensor, sigma_deg, render: RenderConfig) -> torch.Te
     """The lens: a Gaussian blur of ``sigma_deg`` degrees of view (a number, or one per swarm (B,))
     on frames (B, N, C0, H, W) of cameras ``render``."""
     dx, dy = degrees_per_pixel(render)
-    s = torch.as_tensor(sigma_deg, dtype=img.dtype)
-    s = s.view(-1, *([1] * (img.dim() - 3))) if s.dim() else s
+    s = _per_swarm(sigma_deg, img, img.dim() - 3)
     return gaussian_blur(img, s / dx, s / dy)
 
 
 def sensor_noise(img: torch.Tensor, sigma, generator: torch.Generator) -> torch.Tensor:
     """Gaussian noise of standard deviation ``sigma`` (a number, or one per swarm (B,)) on every pixel,
     then clipped to [0, 1] as a sensor's range; the draws from ``generator``."""
-    s = torch.as_tensor(sigma, dtype=img.dtype)
+    s = _per_swarm(sigma, img, img.dim() - 1)
     if not (s > 0).any():
         return img
-    s = s.view(-1, *([1] * (img.dim() - 1))).to(img.device) if s.dim() else s
     n = torch.randn(img.shape, generator=generator, dtype=img.dtype).to(img.device)
     return (img + s * n).clamp(0.0, 1.0)
 
 
 def exposure(img: torch.Tensor, gain, offset) -> torch.Tensor:
     """gain * I + offset, clipped to [0, 1] (numbers, or one per swarm (B,))."""
-    g, o = (torch.as_tensor(x, dtype=img.dtype) for x in (gain, offset))
-    g = g.view(-1, *([1] * (img.dim() - 1))).to(img.device) if g.dim() else g
-    o = o.view(-1, *([1] * (img.dim() - 1))).to(img.device) if o.dim() else o
+    g, o = (_per_swarm(x, img, img.dim() - 1) for x in (gain, offset))
     return (g * img + o).clamp(0.0, 1.0)
 
 
