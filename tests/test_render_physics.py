@@ -167,3 +167,34 @@ def test_meshcat_view_is_standalone_html_and_leaves_no_server_behind():
     assert b"drone_007" in scene and b"set_animation" in scene  # the scene and its animation are inlined
     assert "MeshCat.Viewer" in html and 'src="http' not in html   # the viewer too: nothing to fetch
     assert len(_meshcat_servers()) == before
+
+
+def test_drawing_each_drones_nearest_is_the_full_renderer_on_those_drones():
+    """RenderConfig.nearest: a team larger than the book's draws, for each drone, exactly what the
+    full renderer draws of a swarm made of that drone and its ``nearest`` nearest drones."""
+    cfg = FlockConfig(N=60)
+    r, _ = sample_initial_state(cfg, 2, torch.Generator().manual_seed(1), dtype=torch.float64)
+    k = 12
+    culled = render_egocentric(r, cfg, RenderConfig(nearest=k))
+    full = render_egocentric(r, cfg, RC)
+    assert culled.shape == full.shape
+    assert not torch.allclose(culled, full)  # the farther drones were drawn by the full renderer
+    for b, i in ((0, 0), (0, 37), (1, 59)):
+        d = (r[b] - r[b, i]).norm(dim=-1)
+        d[i] = math.inf
+        keep = torch.cat((torch.tensor([i]), d.argsort()[:k]))
+        alone = render_egocentric(r[b, keep][None], cfg, RC)[0, 0]
+        assert torch.allclose(culled[b, i], alone, atol=1e-12)
+
+
+def test_drawing_the_nearest_changes_nothing_when_they_are_every_drone():
+    r, _ = sample_initial_state(CFG, 3, torch.Generator().manual_seed(2), dtype=torch.float64)
+    full = render_egocentric(r, CFG, RC)
+    for k in (CFG.N - 1, CFG.N + 10):
+        assert torch.equal(render_egocentric(r, CFG, RenderConfig(nearest=k)), full)
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.5, True, "49"])
+def test_nearest_must_be_a_whole_number_of_drones(bad):
+    with pytest.raises(ValueError, match="nearest must be a whole number"):
+        RenderConfig(nearest=bad)

@@ -62,6 +62,10 @@ class RenderConfig:
         depth_scale: distance in m at which the depth channel reads 1.
         topdown_size: pixels per side of the top-down crop.
         topdown_half_width: half-width in m of the top-down crop (None: the communication radius R).
+        nearest: the panorama draws only each drone's ``nearest`` nearest drones (None: every drone).
+            Its cost per drone then stops growing with the team (``column_layers``): at the book's
+            N = 50 every drone sees its 49 others either way, in a team of 400 the farthest of them
+            sit in fog behind nearer bodies. Our choice, none in the paper (AirSim draws everything).
     """
 
     view_height: int = 12
@@ -74,6 +78,7 @@ class RenderConfig:
     depth_scale: float = 0.2
     topdown_size: int = 32
     topdown_half_width: Optional[float] = None
+    nearest: Optional[int] = None
 
     def __post_init__(self) -> None:
         for name in ("view_height", "view_width", "topdown_size"):
@@ -89,6 +94,10 @@ class RenderConfig:
                              f"got {self.channels!r}")
         if self.topdown_half_width is not None and not self.topdown_half_width > 0:
             raise ValueError(f"RenderConfig: topdown_half_width must be > 0 or None, got {self.topdown_half_width!r}")
+        if self.nearest is not None and (not isinstance(self.nearest, int) or isinstance(self.nearest, bool)
+                                         or self.nearest < 1):
+            raise ValueError(f"RenderConfig: nearest must be a whole number >= 1 or None (every drone), "
+                             f"got {self.nearest!r}")
 
     @property
     def panorama_width(self) -> int:
@@ -150,6 +159,27 @@ class ColumnLayers:
     hit_depth: torch.Tensor
 
 
+def seen_pairs(r: torch.Tensor, nearest: Optional[int] = None) -> tuple[torch.Tensor, torch.Tensor]:
+    """The (viewer, drone) pairs a panorama draws: every other drone, or each viewer's ``nearest`` nearest.
+
+    Returns the offsets r_j - r_i of the pairs, (P, 2), and the viewer of each pair, b * N + i, (P,),
+    viewer-major within each swarm. With ``nearest`` < N - 1 the pairs are found from the swarm's
+    distance matrix (N^2 subtractions, no trigonometry), so the rendering after it costs
+    ``nearest`` bodies per drone whatever N is.
+    """
+    B, N, _ = r.shape
+    dev = r.device
+    owner_of = torch.arange(B * N, device=dev)
+    if nearest is None or nearest >= N - 1:
+        off = (r[:, None, :, :] - r[:, :, None, :]).reshape(B, N * N, 2)  # r_j - r_i at i * N + j
+        not_self = ~torch.eye(N, dtype=torch.bool, device=dev).flatten()
+        return off[:, not_self].reshape(-1, 2), owner_of.repeat_interleave(N - 1)
+    d = torch.cdist(r, r) + torch.diag_embed(torch.full((N,), math.inf, dtype=r.dtype, device=dev))
+    j = d.topk(nearest, dim=-1, largest=False, sorted=False).indices  # (B, N, nearest)
+    rj = torch.gather(r, 1, j.reshape(B, N * nearest, 1).expand(-1, -1, 2)).view(B, N, nearest, 2)
+    return (rj - r[:, :, None, :]).reshape(-1, 2), owner_of.repeat_interleave(nearest)
+
+
 def column_layers(r: torch.Tensor, rcfg: RenderConfig) -> ColumnLayers:
     """Find, for every agent and panorama column, the nearest and second-nearest bodies.
 
@@ -162,10 +192,7 @@ def column_layers(r: torch.Tensor, rcfg: RenderConfig) -> ColumnLayers:
     B, N, _ = r.shape
     Wt, rho_b = rcfg.panorama_width, rcfg.body_radius
     dev, dt = r.device, r.dtype
-    off = (r[:, None, :, :] - r[:, :, None, :]).reshape(B, N * N, 2)  # r_j - r_i at i * N + j
-    not_self = ~torch.eye(N, dtype=torch.bool, device=dev).flatten()
-    o = off[:, not_self].reshape(-1, 2)  # (P, 2), P = B N (N - 1) pairs, i-major within each swarm
-    owner = torch.arange(B * N, device=dev).repeat_interleave(N - 1)  # b * N + i of every pair
+    o, owner = seen_pairs(r, rcfg.nearest)
     d = o.norm(dim=-1).clamp(min=1e-6)
     theta = torch.atan2(o[:, 1], o[:, 0])
     alpha = torch.asin((rho_b / d).clamp(max=1.0))

@@ -108,6 +108,27 @@ def run_render(swarms: int = 64, N: int = 50, min_seconds: float = 2.0, device=N
     return rows
 
 
+SCALING_TEAMS = (50, 100, 200, 400)
+"""Team sizes of ``run_render_scaling``."""
+
+
+def run_render_scaling(nearest: int = 49, teams=SCALING_TEAMS, swarms: int = 4, min_seconds: float = 1.0,
+                       device=None) -> list[dict]:
+    """Microseconds per drone image of the panorama against the team size N, drawing every drone and
+    drawing each drone's ``nearest`` nearest (``RenderConfig.nearest``); the same initial states
+    (sample_initial_state, "repair" from N = 100 as the evaluation draws large teams) for both."""
+    rows = []
+    for N in teams:
+        cfg = FlockConfig(N=N, init_method="repair" if N >= 100 else "reject")
+        r, _ = sample_initial_state(cfg, swarms, torch.Generator().manual_seed(0), device=device)
+        row = {"N": N}
+        for key, rcfg in (("all_us", RenderConfig()), ("nearest_us", RenderConfig(nearest=nearest))):
+            n, sec = _time(lambda: render_egocentric(r, cfg, rcfg), min_seconds)
+            row[key] = 1e6 * sec / (n * swarms * N)
+        rows.append(row)
+    return rows
+
+
 CHECK_EPISODES = inspect.signature(train_vgai).parameters["check_episodes"].default
 """Episodes of each round check of a training (``train_vgai``'s default)."""
 
@@ -193,3 +214,12 @@ def main(args=None) -> None:
         print(f"{row['renderer']:32s} {row['agent_images_per_s']:12,.0f} agent-images/s")
     ray = rrows[-1]["agent_images_per_s"]
     print(f"depth strip: torch / pymunk = {strip / ray:.0f}x")
+    nearest = 49
+    print(f"\npanorama, microseconds per drone image against the team, 4 swarms; every drone drawn / "
+          f"each drone's {nearest} nearest (RenderConfig(nearest={nearest}))")
+    srows = run_render_scaling(nearest)
+    for row in srows:
+        print(f"N = {row['N']:4d}: {row['all_us']:7.1f} / {row['nearest_us']:7.1f}")
+    first, last = srows[0], srows[-1]
+    print(f"N = {last['N']} against N = {first['N']}: {last['all_us'] / first['all_us']:.2f}x every drone, "
+          f"{last['nearest_us'] / first['nearest_us']:.2f}x the {nearest} nearest")
