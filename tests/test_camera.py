@@ -95,7 +95,7 @@ def test_a_controller_with_a_camera_sees_its_noise_and_without_one_the_clean_fra
 
 def test_a_training_through_the_camera_runs_every_stage_and_returns_a_clean_eyed_controller():
     vision = VisionConfig(render=RenderConfig(view_height=8, view_width=16))
-    tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=vision,
+    tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=vision, warm_starts=True,
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=2, warm_steps=2, warm_states=1,
                            mlp_epochs=1, joint_steps=2, windows=2, early_steps=10,
                            camera=CameraRanges(noise=(0.0, 0.1), blur_deg=(0.0, 2.0), gain=(0.8, 1.2),

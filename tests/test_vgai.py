@@ -14,6 +14,7 @@ from vgai_lite.graphs import adjacency, gso
 from vgai_lite.learned_controllers import VGAIController
 from vgai_lite.models import AggregationMLP, OddMotionCNN, ResidualBlock, VGAIModel, VisualCNN
 from vgai_lite.render import RenderConfig
+from vgai_lite.camera import CameraRanges
 from vgai_lite.vgai_config import VGAITrainConfig
 from vgai_lite.lab.stage1_cache import cached, stage1_file
 from vgai_lite.vgai_training import (bptt_loss, joint_loss, sample_windows, synthetic_velocities, train_vgai,
@@ -169,7 +170,7 @@ def test_bad_vision_configs_are_refused():
         VGAIController(c.model, CFG, VisionConfig(motion_gap=0, render=VISION.render))
 
 
-MINI = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
+MINI = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION, warm_starts=True,
                        expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
                        warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
 
@@ -191,6 +192,43 @@ def test_a_miniature_vgai_training_changes_both_networks_and_saves_what_it_learn
     assert VGAITrainConfig.from_dict(loaded.meta["train_config"]) == MINI
     for k, t in ctrl.model.state_dict().items():
         torch.testing.assert_close(loaded.model.state_dict()[k], t)
+
+
+def test_the_papers_vgai_learns_only_by_joint_bptt_from_random_weights(tmp_path):
+    """warm_starts False (the paper's): no stage 1 or 2; joint BPTT on the expert's flights (round 0),
+    then after each DAgger round; both networks move, and the MLP keeps its identity normalisation."""
+    cfg = FlockConfig(N=12, T=20)
+    tcfg = dataclasses.replace(MINI, warm_starts=False)
+    ctrl, hist = train_vgai(cfg, tcfg, checkpoint=tmp_path / "p.pt", progress=False, check_episodes=1)
+    assert hist["warm_loss"] == [] and hist["mlp_loss"] == [] and "stage1_seconds" not in hist
+    assert len(hist["joint_loss"]) == (1 + tcfg.dagger_rounds) * tcfg.joint_steps
+    assert [r["stage"] for r in hist["rounds"]] == ["after joint training on the expert's flights", "DAgger round 1"]
+    assert hist["rounds"][0]["episodes"] == tcfg.expert_episodes
+    with torch.random.fork_rng():
+        torch.manual_seed(tcfg.seed)
+        fresh = tcfg.new_model()
+    for part in ("cnn", "mlp"):
+        before, after = getattr(fresh, part).state_dict(), getattr(ctrl.model, part).state_dict()
+        assert any(not torch.equal(before[k], after[k]) for k in before if before[k].is_floating_point())
+    assert torch.equal(ctrl.model.mlp.z_mean, torch.zeros_like(ctrl.model.mlp.z_mean))
+    assert VGAITrainConfig.from_dict(load_controller(tmp_path / "p.pt").meta["train_config"]) == tcfg
+
+
+def test_the_papers_vgai_is_configured_as_the_paper_describes_it():
+    """PAPER: one gray frame (no depth, no motion channel), F = 24, K - 1 = 3, the CNN of Fig. 2 from
+    random weights, eq. 10 alone, DAgger's mixture p = 0.33, Adam at 1e-3; BOOK departs from it in
+    exactly BOOK_RECIPE, and a file written before ``warm_starts`` existed reads as warm-started."""
+    from vgai_lite.vgai_config import BOOK, BOOK_RECIPE, PAPER
+    assert PAPER == VGAITrainConfig()
+    assert PAPER.vision.render.channels == ("gray",) and PAPER.vision.motion_gap == 0
+    assert PAPER.vision.image_shape()[0] == 1
+    assert (PAPER.F, PAPER.K, PAPER.p_learner, PAPER.lr) == (24, 4, 0.33, 1e-3)
+    assert not PAPER.warm_starts and PAPER.motion_features == 0 and PAPER.aux_weight == 0
+    assert PAPER.synthetic_share == 0 and PAPER.learner_swarms == 0 and PAPER.camera == CameraRanges()
+    differ = {f.name for f in dataclasses.fields(VGAITrainConfig) if getattr(PAPER, f.name) != getattr(BOOK, f.name)}
+    assert differ == set(BOOK_RECIPE)
+    old = {k: v for k, v in BOOK.to_dict().items() if k != "warm_starts"}
+    assert VGAITrainConfig.from_dict(old) == BOOK
 
 
 def _unrolled_eq10(cnn, mlp, images, S, u_star, valid):
@@ -257,7 +295,7 @@ def test_a_cached_stage_one_continues_exactly_like_the_run_that_trained_it(tmp_p
     """The K = 2, 3, 4 runs share stage 1 (visual state estimation): a run reading it from the cache
     must end with the same weights as a run training it, and a run of another K must reuse it."""
     cfg = FlockConfig(N=12, T=20)
-    tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION,
+    tcfg = VGAITrainConfig(F=6, K=3, hidden=(8,), cnn_widths=(2, 4), cnn_hidden=8, vision=VISION, warm_starts=True,
                            expert_episodes=2, dagger_rounds=1, episodes_per_round=1, warm_steps=3,
                            warm_states=1, mlp_epochs=1, joint_steps=2, windows=2, early_steps=10)
     plain, _ = train_vgai(cfg, tcfg, progress=False, check_episodes=1)

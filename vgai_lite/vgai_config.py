@@ -1,11 +1,13 @@
 """What defines a VGAI training run: ``VGAITrainConfig``, every knob of ``vgai_training`` in one place.
 
-Introduced in notebook 06. ``VGAITrainConfig()`` is the paper's VGAI (``PAPER``): the plain CNN of
-Fig. 2, stage 1 on the expert's own states, the L1 action loss of eq. 10 alone, DAgger's mixture
-(p = 0.33). The paper gives the loss, the optimiser (Adam, learning rate 1e-3) and DAgger's
-probability; every other field is our choice, explained beside it. The book's VGAI (``BOOK``,
-``book_recipe``) is the paper's with the four changes notebook 06's ablation measures
-(``BOOK_RECIPE``).
+Introduced in notebook 06. ``VGAITrainConfig()`` is the paper's VGAI (``PAPER``), as the paper
+describes it: one intensity frame per step and no depth (``PAPER_VISION``), the CNN of Fig. 2, no
+warm start (the CNN and the MLP learn together from random weights by K-step BPTT, Fig. 3), the L1
+action loss of eq. 10 alone, DAgger's mixture (p = 0.33). The paper gives the sensor, the networks,
+the loss, the optimiser (Adam, learning rate 1e-3) and DAgger's probability; the training's length,
+the resolution and every other field are our choice, explained beside it. The book's VGAI (``BOOK``,
+``book_recipe``) is the paper's with the book's departures (``BOOK_RECIPE``): its sensor and warm
+starts (``BOOK_SENSOR``) and the four changes notebook 06's ablation measures.
 """
 
 from __future__ import annotations
@@ -18,7 +20,12 @@ from .camera import CameraRanges
 from .config import config_dict
 from .graphs import DEFAULT_GSO
 from .models import AggregationMLP, VGAIModel, visual_cnn
+from .render import RenderConfig
 from .vision import VisionConfig
+
+PAPER_VISION = VisionConfig(render=RenderConfig(channels=("gray",)), motion_gap=0)
+"""The paper's sensor: the four cameras' intensity at one instant (its CNN takes one frame; AirSim's
+RGB as one gray channel), no depth channel and no earlier frame."""
 
 
 @dataclass(frozen=True)
@@ -29,7 +36,13 @@ class VGAITrainConfig:
         F, K, hidden, gso: features per agent (paper default 24), taps (K - 1 = 3 exchanges),
             MLP hidden widths, graph shift operator.
         cnn_widths, cnn_hidden: channels of the CNN's two stages, width of its hidden FC layer.
-        vision: what the agents see (view, resolution, motion frames).
+        vision: what the agents see (view, resolution, channels, motion frames). Default: the
+            paper's sensor, ``PAPER_VISION``; the book's: ``VisionConfig()``, gray and depth with a
+            motion channel from the frame g = 5 steps earlier.
+        warm_starts: stages 1 and 2 before the joint training (``vgai_training``): the CNN first
+            regresses the exact local features, then the MLP is fitted on its frozen features. False
+            (the paper's): both networks start from random weights and learn only by joint BPTT,
+            first on the expert's flights (round 0), then after each DAgger round.
         expert_episodes: episodes of round 0, flown by the expert alone.
         dagger_rounds, episodes_per_round, p_learner: DAgger rounds after the warm starts, new
             episodes per round, probability of following the learner at each step (paper: 0.33).
@@ -77,7 +90,8 @@ class VGAITrainConfig:
     gso: str = DEFAULT_GSO
     cnn_widths: tuple = (8, 16)
     cnn_hidden: int = 64
-    vision: VisionConfig = VisionConfig()
+    vision: VisionConfig = PAPER_VISION
+    warm_starts: bool = False
     expert_episodes: int = 40
     dagger_rounds: int = 4
     episodes_per_round: int = 16
@@ -116,6 +130,8 @@ class VGAITrainConfig:
         for name in ("p_learner", "early_share", "synthetic_share", "learner_swarms"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"VGAITrainConfig: {name} is a probability, in [0, 1]; got {getattr(self, name)!r}")
+        if not isinstance(self.warm_starts, bool):
+            raise ValueError(f"VGAITrainConfig: warm_starts must be True or False, got {self.warm_starts!r}")
         if not self.lr > 0 or not self.aux_weight >= 0:
             raise ValueError(f"VGAITrainConfig: lr must be > 0 and aux_weight >= 0, got {self.lr!r}, {self.aux_weight!r}")
         lo, hi = self.synthetic_speeds
@@ -137,6 +153,7 @@ class VGAITrainConfig:
         """The inverse of ``to_dict``. Every field must be there, and no other: a file that differs was
         written by another version of the training, whose behaviour this class may not reproduce."""
         names = {f.name for f in dataclasses.fields(VGAITrainConfig)}
+        d = {**LEGACY_FIELDS, **d}
         missing, unknown = sorted(names - set(d)), sorted(set(d) - names)
         if missing or unknown:
             raise ValueError(f"a VGAI training configuration lacks {missing} and has unknown fields {unknown}: "
@@ -153,13 +170,23 @@ class VGAITrainConfig:
                          AggregationMLP(self.K, self.F, self.hidden))
 
 
-PAPER = VGAITrainConfig()
-"""The paper's VGAI: F = 24, K - 1 = 3, the plain CNN, the L1 action loss, DAgger's mixture."""
+LEGACY_FIELDS = {"warm_starts": True}
+"""Fields added after files were written, with the value every file written before them had (until
+2026-12-04 every VGAI training warm-started)."""
 
-BOOK_RECIPE = {"motion_features": None, "synthetic_share": 0.5, "aux_weight": 5.0, "learner_swarms": 0.5}
-"""The book's changes to the paper's VGAI, each measured in notebook 06's ablation: odd motion features
-(F_m = F // 3), synthetic relative velocities in stage 1, the state-estimation loss kept in stage 3,
-half of DAgger's swarms flown by the learner alone."""
+PAPER = VGAITrainConfig()
+"""The paper's VGAI: its sensor (one gray frame), F = 24, K - 1 = 3, the CNN of Fig. 2 from random
+weights, the L1 action loss of eq. 10 by K-step BPTT, DAgger's mixture."""
+
+BOOK_SENSOR = {"vision": VisionConfig(), "warm_starts": True}
+"""The book's sensor (gray and depth, with a motion channel from the frame g steps earlier) and its
+warm starts (stage 1's state estimation, stage 2's MLP fit): the departures every book VGAI makes."""
+
+BOOK_RECIPE = {**BOOK_SENSOR, "motion_features": None, "synthetic_share": 0.5, "aux_weight": 5.0,
+               "learner_swarms": 0.5}
+"""The book's changes to the paper's VGAI: ``BOOK_SENSOR``, then the four measured in notebook 06's
+ablation: odd motion features (F_m = F // 3), synthetic relative velocities in stage 1, the
+state-estimation loss kept in stage 3, half of DAgger's swarms flown by the learner alone."""
 
 
 def book_recipe(**fields) -> VGAITrainConfig:

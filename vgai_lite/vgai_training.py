@@ -8,8 +8,10 @@ agent's K images go through the CNN, the features travel through the delayed agg
 the MLP acts once at the last step, and the L1 loss of eq. 10 against the expert's action flows back
 through all K CNN passes (``bptt_loss``).
 
-The paper is silent on how long to train and on warm starts. Ours, in three stages, sized for two
-CPU cores (``train_vgai``, at the bottom of this file; each record in ``data/`` says how long it took):
+The paper is silent on how long to train and on warm starts. The paper's VGAI (``warm_starts`` False)
+runs stage 0 and then stage 3 only, from random weights, first on the expert's flights. The book's,
+in three stages, sized for two CPU cores (``train_vgai``, at the bottom of this file; each record in
+``data/`` says how long it took):
   0. the expert flies ``expert_episodes`` swarms alone (DAgger's round 0, ``imitation.EpisodeStore``);
   1. visual state estimation (``fit_state_estimator``): the CNN, through a linear head, regresses the
      DAGNN's N_LOCAL_FEATURES = 6 exact local features from single agents' images;
@@ -319,16 +321,22 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
                      history["rounds"][-1]["check_relative_cost"], time.perf_counter() - start)
             save()
 
-        # Round 0: the expert flies alone; stages 1 and 2 learn from its flights.
+        # Round 0: the expert flies alone; the warm starts (stages 1 and 2) learn from its flights,
+        # or, as in the paper, joint K-step BPTT from random weights.
         store = EpisodeStore()
         store.fly(None, cfg, *sample_initial_state(cfg, tcfg.expert_episodes, gen), 0.0, gen)
-        r, v, u = store.tensors()
-        history.update(stage1(model.cnn, cfg, tcfg, r, v, gen, progress))
-        history["mlp_loss"] = fit_mlp(model, cfg, tcfg, r, v, u, gen, progress)
-        check("after stages 1-2")
+        opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
+        if tcfg.warm_starts:
+            r, v, u = store.tensors()
+            history.update(stage1(model.cnn, cfg, tcfg, r, v, gen, progress))
+            history["mlp_loss"] = fit_mlp(model, cfg, tcfg, r, v, u, gen, progress)
+            check("after stages 1-2")
+        else:
+            history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
+                                                 desc="stage 3: joint BPTT on the expert's flights")
+            check("after joint training on the expert's flights")
 
         # Stage 3: each DAgger round adds the learner's own flights, then joint K-step BPTT on all.
-        opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
         for rnd in range(tcfg.dagger_rounds):
             dagger_round(learner, store, cfg, tcfg, gen)
             history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,

@@ -34,17 +34,20 @@ import torch
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from vgai_lite import CameraRanges, FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
+from vgai_lite import PAPER, CameraRanges, FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
 from vgai_lite.lab.stage1_cache import cached  # noqa: E402
 
+BASES = {**VGAI_RUNS, "paper": PAPER}
+
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--name", required=True, help="names data/experiments/NAME.pt and NAME.json")
-    p.add_argument("--base", default="vgai_F24", choices=sorted(VGAI_RUNS))
+    p.add_argument("--base", default="vgai_F24", choices=sorted(BASES),
+                   help="the recipe the changes apply to: a shipped run's, or 'paper' (PAPER, the paper's VGAI)")
     p.add_argument("--motion-features", type=int, default=None)
     p.add_argument("--synthetic-share", type=float, default=None)
     p.add_argument("--aux-weight", type=float, default=None)
@@ -71,7 +74,7 @@ def main(argv=None) -> int:
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
-    cfg, tcfg = FlockConfig(), dataclasses.replace(VGAI_RUNS[args.base], **changes)
+    cfg, tcfg = FlockConfig(), dataclasses.replace(BASES[args.base], **changes)
     if args.camera is not None:
         parts = args.camera.split(":")
         if len(parts) != 5:

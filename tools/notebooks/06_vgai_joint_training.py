@@ -88,8 +88,11 @@ plt.show()
 # The CNN's last $F/3$ features are odd in the motion channels (`motion_features`). These four
 # changes to the paper's recipe are what make VGAI flock; section 6 explains each one and measures
 # what it buys. Every knob lives in one configuration object, `VGAITrainConfig`, whose defaults are
-# the paper's VGAI (`PAPER`); the book's recipe is the preset `BOOK`, the paper's with these four
-# changes (`BOOK_RECIPE`; `book_recipe(F=6)` is the book's recipe at F = 6):
+# the paper's VGAI as the paper describes it (`PAPER`: one gray frame per step, no depth, no warm
+# start, eq. 10 alone, DAgger's mixture). The book's recipe is the preset `BOOK`: the paper's with
+# the book's sensor (gray and depth, with the motion channel) and warm starts (stages 1 and 2,
+# `BOOK_SENSOR`), then these four changes (`BOOK_RECIPE` holds them all; `book_recipe(F=6)` is the
+# book's recipe at F = 6):
 
 # %%
 print(BOOK_RECIPE)

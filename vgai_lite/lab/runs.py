@@ -24,7 +24,7 @@ from ..evaluate import relative_cost
 from ..imitation import load_or_train
 from .provenance import Provenance, sha256
 from ..state_estimation import estimator_quality, train_state_estimator
-from ..vgai_config import VGAITrainConfig, book_recipe
+from ..vgai_config import BOOK_SENSOR, VGAITrainConfig, book_recipe
 from ..vgai_training import train_vgai
 from .stage1_cache import cached
 from ..vision import VisionConfig
@@ -65,10 +65,14 @@ VGAI_RUNS: dict[str, VGAITrainConfig] = {
 """The VGAI controllers the book ships in data/vgai/, by name."""
 
 PLAIN_RUNS: dict[str, VGAITrainConfig] = {
-    f"{name}_plain": VGAITrainConfig(F=t.F, K=t.K) for name, t in VGAI_RUNS.items() if t.motion_features}
-"""The book's configurations trained with the paper's recipe (``VGAITrainConfig``'s defaults): their
-records (and vgai_F24_plain's checkpoint) are kept in data/experiments/, for notebook 06's table of
-what was tried and notebook 07's two trainings of one configuration."""
+    f"{name}_plain": VGAITrainConfig(F=t.F, K=t.K, **BOOK_SENSOR) for name, t in VGAI_RUNS.items() if t.motion_features}
+"""The book's configurations trained with the paper's loss, CNN and DAgger on the book's sensor after
+its warm starts (``BOOK_SENSOR``; "the paper's recipe" of notebook 06's first ablation, before the
+paper's VGAI itself was flown): their records (and vgai_F24_plain's checkpoint) are kept in
+data/experiments/, for notebook 06's table and notebook 07's two trainings of one configuration."""
+
+PAPER_SEEDS = (0, 1, 2)
+"""Training seeds of the paper's VGAI (``PAPER``) in the book's simulator: data/experiments/vgai_paper_seedS."""
 
 STAGE1_CACHE = DATA_DIR / "results" / "stage1"
 """Where ``book_vgai`` keeps (and finds) stage 1 of a VGAI training: runs that differ only in K share
