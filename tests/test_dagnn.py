@@ -150,3 +150,40 @@ def test_a_short_dagger_run_lowers_the_imitation_loss(tmp_path):
     assert hist["loss"][2] < hist["loss"][0]  # three epochs on round 0's data
     assert len(hist["rounds"]) == 3 and (tmp_path / "d.pt").is_file()
     assert load_controller(tmp_path / "d.pt").meta["finished"]
+
+
+def test_a_training_over_teams_and_radii_flies_groups_drawn_from_them():
+    """flight_groups: without teams and radii every swarm flies the training's configuration (and draws
+    nothing, so such a training is the one it always was); with them, groups of ``group_swarms`` whose
+    N comes from ``teams``, R from the range, large teams drawn as the book's evaluation draws them."""
+    from vgai_lite.dagnn_training import LARGE_TEAM, flight_groups
+    from vgai_lite.lab.reproduce import ReproduceConfig
+
+    assert LARGE_TEAM == ReproduceConfig().repair_from
+    cfg, gen = FlockConfig(), torch.Generator().manual_seed(0)
+    state = gen.get_state()
+    assert flight_groups(cfg, DAGNNTrainConfig(), 40, gen) == [(cfg, 40)]
+    assert torch.equal(gen.get_state(), state)
+    tcfg = DAGNNTrainConfig(teams=(20, 80), radii=(1.0, 2.0), group_swarms=3)
+    groups = flight_groups(cfg, tcfg, 40, gen)
+    assert [n for _, n in groups] == [3] * 13 + [1]
+    assert {g.N for g, _ in groups} == {20, 80}
+    assert all(1.0 <= g.R <= 2.0 for g, _ in groups) and len({g.R for g, _ in groups}) == len(groups)
+    assert all(g.init_method == ("repair" if g.N >= LARGE_TEAM else "reject") for g, _ in groups)
+    assert all(g.replace(N=cfg.N, R=cfg.R, init_method=cfg.init_method) == cfg for g, _ in groups)
+
+
+def test_a_short_training_over_teams_and_radii_learns_from_every_group(tmp_path):
+    cfg = FlockConfig(N=20, T=30)
+    tcfg = DAGNNTrainConfig(K=2, hidden=(8,), rounds=2, episodes_per_round=4, epochs_per_round=1,
+                            batch_size=256, teams=(12, 30), radii=(1.2, 2.0), group_swarms=2)
+    ctrl, hist = train_dagnn(cfg, tcfg, progress=False, check_episodes=1)
+    assert ctrl.cfg == cfg  # the controller returned flies the training's configuration
+    assert hist["rounds"][0]["rows"] > 0 and len(hist["rounds"]) == 2
+
+
+@pytest.mark.parametrize("bad", [{"teams": (50, 1)}, {"teams": (50.0,)}, {"radii": (2.0, 1.0)}, {"radii": (1.0,)},
+                                 {"radii": (0.0, 1.0)}, {"group_swarms": 0}])
+def test_teams_and_radii_must_be_drones_and_a_range(bad):
+    with pytest.raises(ValueError, match="DAGNNTrainConfig"):
+        DAGNNTrainConfig(**bad)

@@ -49,6 +49,13 @@ class DAGNNTrainConfig:
             early row and a quarter of the late ones spends the updates where the labels live.
         early_steps: see ``keep_late``.
         seed: seed of the training initial conditions, the DAgger coin flips and the weights.
+        teams, radii: team sizes N and the range (low, high) of communication radii R (m) the
+            training's swarms fly with (``flight_groups``): each round's swarms fly in groups of
+            ``group_swarms``, each group with its N drawn from ``teams`` and its R uniform in
+            ``radii``. Empty (the paper's): every swarm flies the training's configuration. The
+            features (eq. 9) and the GSO follow each group's R, the expert's action does not
+            depend on R; the authors' released code draws R from U(1.0, 3.5) m per sample.
+        group_swarms: swarms per group of ``teams`` and ``radii``.
     """
 
     K: int = 4
@@ -64,9 +71,16 @@ class DAGNNTrainConfig:
     keep_late: float = 0.25
     early_steps: int = 50
     seed: int = 0
+    teams: tuple = ()
+    radii: tuple = ()
+    group_swarms: int = 10
 
     def __post_init__(self) -> None:
-        for name in ("K", "rounds", "episodes_per_round", "epochs_per_round", "batch_size"):
+        if any(not isinstance(n, int) or isinstance(n, bool) or n < 2 for n in self.teams):
+            raise ValueError(f"DAGNNTrainConfig: teams must be whole numbers of drones >= 2, got {self.teams!r}")
+        if self.radii and (len(self.radii) != 2 or not 0 < self.radii[0] <= self.radii[1]):
+            raise ValueError(f"DAGNNTrainConfig: radii must be (low, high) in m with 0 < low <= high, got {self.radii!r}")
+        for name in ("K", "rounds", "episodes_per_round", "epochs_per_round", "batch_size", "group_swarms"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ValueError(f"DAGNNTrainConfig: {name} must be a whole number >= 1, got {value!r}")
@@ -124,6 +138,30 @@ def collect(learner: DAGNNController, cfg: FlockConfig, r0: torch.Tensor, v0: to
     return torch.cat(Zs), torch.cat(Us)
 
 
+LARGE_TEAM = 75
+"""From this team size on, a group's initial states are drawn with ``init_method="repair"`` (rejection
+of whole swarms rarely succeeds there), as the book's evaluation draws them."""
+
+
+def flight_groups(cfg: FlockConfig, tcfg: DAGNNTrainConfig, swarms: int, gen: torch.Generator) -> list:
+    """The configurations one round's ``swarms`` swarms fly in, as (FlockConfig, count) pairs: all of
+    them in ``cfg`` without ``tcfg.teams`` and ``tcfg.radii``, else groups of ``tcfg.group_swarms``,
+    each with N drawn from ``teams`` and R uniform in ``radii`` (``gen``)."""
+    if not tcfg.teams and not tcfg.radii:
+        return [(cfg, swarms)]
+    groups = []
+    for start in range(0, swarms, tcfg.group_swarms):
+        changes = {}
+        if tcfg.teams:
+            n = tcfg.teams[int(torch.randint(len(tcfg.teams), (1,), generator=gen))]
+            changes.update(N=n, init_method="repair" if n >= LARGE_TEAM else cfg.init_method)
+        if tcfg.radii:
+            lo, hi = tcfg.radii
+            changes["R"] = lo + (hi - lo) * float(torch.rand((), generator=gen, dtype=torch.float64))
+        groups.append((cfg.replace(**changes), min(tcfg.group_swarms, swarms - start)))
+    return groups
+
+
 def train_dagnn(cfg: FlockConfig, tcfg: DAGNNTrainConfig = DAGNNTrainConfig(),
                 checkpoint: Optional[Union[str, Path]] = None, device=None, progress: bool = True,
                 check_episodes: int = 10) -> tuple[DAGNNController, dict]:
@@ -157,9 +195,12 @@ def _train_dagnn(cfg, tcfg, checkpoint, device, progress, check_episodes):
     bar = tqdm(total=tcfg.rounds, desc="DAgger rounds", disable=not progress)
     for rnd in range(tcfg.rounds):
         model.eval()
-        r0, v0 = sample_initial_state(cfg, tcfg.episodes_per_round, gen, device=device)
-        data.add(*collect(learner, cfg, r0, v0, p_learner=0.0 if rnd == 0 else tcfg.p_learner,
-                          generator=gen, keep_late=tcfg.keep_late, early_steps=tcfg.early_steps))
+        for flight, swarms in flight_groups(cfg, tcfg, tcfg.episodes_per_round, gen):
+            learner.cfg = flight  # the features and the GSO of this group's radius
+            r0, v0 = sample_initial_state(flight, swarms, gen, device=device)
+            data.add(*collect(learner, flight, r0, v0, p_learner=0.0 if rnd == 0 else tcfg.p_learner,
+                              generator=gen, keep_late=tcfg.keep_late, early_steps=tcfg.early_steps))
+        learner.cfg = cfg
         Zall, Uall = data.tensors()
         if rnd == 0:
             model.set_normalization(Zall)

@@ -1,0 +1,80 @@
+"""Experiment: a controller trained on one team and radius, or on many, flown across the teams and
+radii of Tables 2b and 3 (issue: one controller for every team and radius).
+
+    python tools/experiments/teams_and_radii.py --name dagnn_teams --teams 50,100,200 --radii 1.0,2.0
+    python tools/experiments/teams_and_radii.py --name dagnn_K4 --evaluate data/dagnn/dagnn_K4.pt
+
+Trains the book's DAGNN (``DAGNNTrainConfig()``, K - 1 = 3) with its swarms flown in groups whose N
+is drawn from ``--teams`` and R uniformly from ``--radii`` (``dagnn_training.flight_groups``), or
+evaluates a checkpoint, then flies it on validation episodes (``book.VALIDATION_SEED``: this is a
+choice, so never the test episodes) at every N' of ``--fly-teams`` (R = 1.5 m) and every R of
+``--fly-radii`` (N = 50), as ``reproduce.flight_config`` flies the tables' columns. Writes
+``data/experiments/NAME_teams.json`` (and the checkpoint ``NAME.pt`` when it trains): per cell the
+relative cost with its interval, the velocity variance at 5 s, connectivity at 5 s, closest approaches.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import torch
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from vgai_lite import DAGNNTrainConfig, FlockConfig, load_controller, relative_cost, train_dagnn  # noqa: E402
+from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
+from vgai_lite.lab.provenance import Provenance  # noqa: E402
+from vgai_lite.lab.reproduce import ReproduceConfig, flight_config  # noqa: E402
+
+
+def _numbers(text: str, kind):
+    return tuple(kind(x) for x in text.split(",") if x)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--name", required=True)
+    p.add_argument("--teams", default="", help="N drawn per group of training swarms, e.g. 50,100,200")
+    p.add_argument("--radii", default="", help="low,high: R (m) drawn uniformly per group, e.g. 1.0,2.0")
+    p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: fly this checkpoint")
+    p.add_argument("--fly-teams", default="50,100,200")
+    p.add_argument("--fly-radii", default="1.0,2.0")
+    p.add_argument("--episodes", type=int, default=10, help="validation episodes per cell")
+    p.add_argument("--threads", type=int, default=2)
+    args = p.parse_args(argv)
+    torch.set_num_threads(args.threads)
+    command = " ".join(["python tools/experiments/teams_and_radii.py"] + (argv or sys.argv[1:]))
+    folder = DATA_DIR / "experiments"
+    out = {"command": command, "cells": {}}
+    if args.evaluate:
+        ckpt = Path(args.evaluate)
+        controller = load_controller(ckpt)
+    else:
+        ckpt = folder / f"{args.name}.pt"
+        tcfg = DAGNNTrainConfig(teams=_numbers(args.teams, int), radii=_numbers(args.radii, float))
+        with Provenance(command) as prov:
+            controller, hist = train_dagnn(FlockConfig(), tcfg, checkpoint=ckpt, progress=False)
+        out.update(train_config=tcfg.to_dict(), train_seconds=round(hist["seconds"], 1),
+                   round_checks=hist["rounds"], training=prov.record())
+    rc = ReproduceConfig()
+    cells = [("N", n) for n in _numbers(args.fly_teams, int)] + [("R", r) for r in _numbers(args.fly_radii, float)]
+    with Provenance(command) as prov:
+        for table, column in cells:
+            flight = flight_config(rc, table, column)
+            flown = load_controller(ckpt, cfg=flight)
+            res = relative_cost(flown, flight, episodes=args.episodes, seed=VALIDATION_SEED, name=args.name)
+            print(f"{table} = {column}: {res}", flush=True)
+            out["cells"][f"{table}={column}"] = {"config": {"N": flight.N, "R": flight.R}, **res.summary()}
+    out["evaluation"] = prov.record(checkpoint=ckpt, seed=VALIDATION_SEED, episodes=args.episodes)
+    path = folder / f"{args.name}_teams.json"
+    path.write_text(json.dumps(out, indent=1) + "\n")
+    print("wrote", path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
