@@ -7,9 +7,11 @@ the local features on flights it was not trained on.
 from __future__ import annotations
 
 import time
+from typing import Optional
 
 import torch
 
+from .camera import CameraRanges, draw_camera
 from .config import FlockConfig
 from .controllers import ExpertController
 from .features import N_LOCAL_FEATURES, local_features
@@ -23,18 +25,22 @@ from .vision import VisionConfig, stored_images
 
 @torch.no_grad()
 def estimator_quality(cnn: VisualCNN, vision: VisionConfig, cfg: FlockConfig, episodes: int = 8,
-                      times=(2, 8, 20, 60), *, seed: int, pilot=None) -> dict:
+                      times=(2, 8, 20, 60), *, seed: int, pilot=None, camera: Optional[CameraRanges] = None) -> dict:
     """Correlation between the CNN's estimate (aux head) and the exact local features, per feature,
     at a few time steps of flights from the initial conditions of ``seed`` (held out from the
     training: e.g. ``book.WORKING_SEED``) flown by ``pilot`` (default the expert; a VGAI shows the states VGAI meets):
-    {t: [6 values]}."""
-    r0, v0 = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
+    {t: [6 values]}. ``camera``: the images seen through cameras drawn from these ranges, one per
+    flight (default: the renderer's frames)."""
+    gen = torch.Generator().manual_seed(seed)
+    r0, v0 = sample_initial_state(cfg, episodes, gen)
     pilot = ExpertController(cfg) if pilot is None else pilot
     traj = rollout(pilot, cfg, r0, v0, steps=max(max(times) + 1, cfg.T))
+    cam = draw_camera(camera, vision.render, episodes, cfg.N, gen)
     out = {}
     for t in times:
         e, tt = torch.arange(episodes), torch.full((episodes,), t)
-        pred = cnn.aux_standardized(cnn(stored_images(vision, cfg, traj.r, traj.v, e, tt).flatten(0, 1)))
+        images = stored_images(vision, cfg, traj.r, traj.v, e, tt, cam.at(t) if cam is not None else None)
+        pred = cnn.aux_standardized(cnn(images.flatten(0, 1)))
         X = local_features(traj.r[t], traj.v[t], cfg.R).flatten(0, 1)
         out[t] = [torch.corrcoef(torch.stack((pred[:, k], X[:, k])))[0, 1].item() for k in range(N_LOCAL_FEATURES)]
     return out
