@@ -68,6 +68,7 @@ DEFINED_NUMBERS = {
     "255": "10/255, the authors' test noise on 8-bit pixel values",
     "144": "the paper's camera rows (144 x 256 pixels)",
     "256": "the paper's camera columns (144 x 256 pixels)",
+    "3.5": "the top of U(1.0, 3.5) m, the radius range of the authors' released training code",
 }
 
 

@@ -58,6 +58,12 @@ def test_a_records_provenance_is_complete_and_names_its_checkpoint(path, rec):
     assert {"episodes_seed", "episodes"} <= set(prov)
     if rec.get("controller") in RULES:  # a rule, not a trained network: no checkpoint
         return
+    if "checkpoints" in prov:  # a record that read several networks names each, with its hash
+        assert prov["checkpoints"], f"{path.name} names an empty list of checkpoints"
+        for name, digest in prov["checkpoints"].items():
+            assert (ROOT / name).is_file(), f"{path.name} read {name}, which is not in the repository"
+            assert sha256(ROOT / name) == digest, f"{name} changed since {path.name} was written"
+        return
     assert {"checkpoint", "checkpoint_sha256"} <= set(prov)
     ckpt = ROOT / prov["checkpoint"]
     assert ckpt.is_file(), f"{path.name} flew {prov['checkpoint']}, which is not in the repository"

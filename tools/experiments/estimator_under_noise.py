@@ -27,7 +27,7 @@ from vgai_lite import FlockConfig, load_controller  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
 from vgai_lite.camera import CameraRanges  # noqa: E402
 from vgai_lite.features import FEATURE_NAMES  # noqa: E402
-from vgai_lite.lab.provenance import Provenance  # noqa: E402
+from vgai_lite.lab.provenance import Provenance, sha256  # noqa: E402
 from vgai_lite.state_estimation import estimator_quality  # noqa: E402
 
 SIGMAS = (0.0, 0.02, 10 / 255, 0.05, 0.1)
@@ -59,7 +59,8 @@ def main(argv=None) -> int:
                 rows[f"{sigma:.4g}"] = {str(t): [round(c, 3) for c in q[t]] for t in TIMES}
                 print(name, f"sigma {sigma:.4g}", {t: [round(c, 2) for c in q[t][:2]] for t in TIMES}, flush=True)
             out["checkpoints"][name] = {"channels": list(vgai.vision.render.channels), "correlation": rows}
-    out["provenance"] = prov.record(seed=VALIDATION_SEED, episodes=args.episodes)
+    out["provenance"] = prov.record(seed=VALIDATION_SEED, episodes=args.episodes,
+                                    checkpoints={f"data/{name}.pt": sha256(DATA_DIR / f"{name}.pt") for name in CHECKPOINTS})
     Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
     print("wrote", args.out)
     return 0

@@ -36,6 +36,8 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import PAPER, CameraRanges, FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
+from vgai_lite.vgai_config import PAPER_VISION  # noqa: E402
+from vgai_lite.vision import VisionConfig  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
 from vgai_lite.lab.stage1_cache import cached  # noqa: E402
@@ -61,6 +63,10 @@ def main(argv=None) -> int:
                         "drones with a dead camera, e.g. 0,0.08:0,1.5:0.8,1.2:-0.05,0.05:0.1")
     p.add_argument("--channels", default=None,
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
+    p.add_argument("--sensor", choices=("paper", "book"), default=None,
+                   help="the vision: the paper's (PAPER_VISION: one gray frame) or the book's (gray, depth, motion)")
+    p.add_argument("--warm-starts", choices=("on", "off"), default=None,
+                   help="stages 1-2 before the joint training (on: the book's) or joint BPTT from random weights (off)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
@@ -74,7 +80,12 @@ def main(argv=None) -> int:
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
+    if args.warm_starts is not None:
+        changes["warm_starts"] = args.warm_starts == "on"
     cfg, tcfg = FlockConfig(), dataclasses.replace(BASES[args.base], **changes)
+    if args.sensor is not None:  # recorded by name, like --channels
+        tcfg = dataclasses.replace(tcfg, vision=PAPER_VISION if args.sensor == "paper" else VisionConfig())
+        changes["sensor"] = args.sensor
     if args.camera is not None:
         parts = args.camera.split(":")
         if len(parts) != 5:
