@@ -74,6 +74,32 @@ data/experiments/, for notebook 06's table and notebook 07's two trainings of on
 PAPER_SEEDS = (0, 1, 2)
 """Training seeds of the paper's VGAI (``PAPER``) in the book's simulator: data/experiments/vgai_paper_seedS."""
 
+CAMERA_RUNS: dict[str, dict[str, str]] = {
+    "wide": {"gray + depth": "vgai_camera", "gray only": "vgai_camera_gray"},
+    "narrower": {"gray + depth": "vgai_camera_narrow", "gray only": "vgai_camera_narrow_gray"},
+}
+"""The book's recipe trained through the camera (``VGAITrainConfig.camera``), by the width of the
+camera's ranges and the sensor: data/experiments/NAME.pt, .json and NAME_cameras.json (notebook 08)."""
+
+
+def chosen_camera_runs(folder: Optional[Path] = None) -> dict[str, str]:
+    """For each sensor of CAMERA_RUNS, the camera training with the lowest relative cost on clean
+    frames of the validation episodes (``camera_eval``'s record, NAME_cameras.json): the rule of notebook
+    08, read by 08 and 09 alike. Returns {"gray + depth": name, "gray only": name}."""
+    folder = DATA_DIR / "experiments" if folder is None else Path(folder)
+    chosen = {}
+    for sensor in ("gray + depth", "gray only"):
+        costs = {}
+        for ranges in CAMERA_RUNS.values():
+            rec = json.loads((folder / f"{ranges[sensor]}_cameras.json").read_text())["settings"]["clean"]
+            if rec["seed"] != VALIDATION_SEED:
+                raise ValueError(f"{ranges[sensor]}_cameras.json is not on the validation episodes "
+                                 f"(seed {rec['seed']}, expected {VALIDATION_SEED}): a choice is made on them")
+            costs[ranges[sensor]] = rec["relative_cost_mean"]
+        chosen[sensor] = min(costs, key=costs.get)
+    return chosen
+
+
 STAGE1_CACHE = DATA_DIR / "results" / "stage1"
 """Where ``book_vgai`` keeps (and finds) stage 1 of a VGAI training: runs that differ only in K share
 it, as in ``reproduce``, which uses the same folder."""
