@@ -163,3 +163,33 @@ def test_the_camera_choice_takes_the_lowest_clean_validation_cost_per_sensor(tmp
     shipped = chosen_camera_runs()
     assert shipped["gray + depth"] in {r["gray + depth"] for r in CAMERA_RUNS.values()}
     assert shipped["gray only"] in {r["gray only"] for r in CAMERA_RUNS.values()}
+
+
+def test_every_shipped_model_is_found_finished_with_its_run_configuration():
+    """The load-or-train rule must recognise every shipped checkpoint, or the first `reproduce` or
+    notebook that asks for it trains it again (as adding a field to a configuration once did)."""
+    from vgai_lite.book import DATA_DIR
+    from vgai_lite.checkpoints import is_finished_with
+    from vgai_lite.config import FlockConfig
+    from vgai_lite.lab.runs import DAGNN_RUNS, VGAI_RUNS, VGAI_SEED_RUNS
+
+    cfg = FlockConfig()
+    runs = [(DATA_DIR / "dagnn" / f"{n}.pt", t) for n, t in DAGNN_RUNS.items()]
+    runs += [(DATA_DIR / "vgai" / f"{n}.pt", t) for n, t in VGAI_RUNS.items()]
+    runs += [(DATA_DIR / "vgai" / "seeds" / f"{n}.pt", t) for n, t in VGAI_SEED_RUNS.items()]
+    stale = [p.name for p, t in runs if not is_finished_with(p, cfg, t.to_dict(), read=t.read_stored)]
+    assert not stale, f"these shipped checkpoints would be trained again: {stale}"
+
+
+def test_a_stored_configuration_is_read_with_the_values_of_fields_added_since():
+    from vgai_lite.dagnn_training import DAGNNTrainConfig
+    from vgai_lite.vgai_config import VGAITrainConfig, book_recipe
+
+    old = {k: v for k, v in DAGNNTrainConfig().to_dict().items() if k not in DAGNNTrainConfig.LEGACY_FIELDS}
+    assert DAGNNTrainConfig.read_stored(old) == DAGNNTrainConfig().to_dict()
+    assert DAGNNTrainConfig.read_stored(old) != DAGNNTrainConfig(teams=(50, 100)).to_dict()
+    book = book_recipe().to_dict()
+    old = {k: v for k, v in book.items() if k != "warm_starts"}
+    old["vision"] = {**old["vision"], "render": {k: v for k, v in old["vision"]["render"].items() if k != "nearest"}}
+    assert VGAITrainConfig.read_stored(old) == book  # written before warm_starts and nearest: warm-started, every drone drawn
+    assert VGAITrainConfig.read_stored({"no such": 1}) == {"no such": 1}  # unreadable: matches nothing, trained again

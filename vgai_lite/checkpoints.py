@@ -12,7 +12,7 @@ import dataclasses
 import hashlib
 import json
 from pathlib import Path
-from typing import Optional, Union
+from typing import Callable, Optional, Union
 
 import torch
 
@@ -69,16 +69,21 @@ def read_checkpoint(path: Union[str, Path]) -> dict:
     return payload
 
 
-def is_finished_with(path: Union[str, Path], cfg: FlockConfig, train_config: dict) -> bool:
+def is_finished_with(path: Union[str, Path], cfg: FlockConfig, train_config: dict,
+                     read: Optional[Callable[[dict], dict]] = None) -> bool:
     """True when ``path`` holds a controller whose training ran to the end with exactly ``cfg``
-    and the training configuration ``train_config`` (a dict, as stored): the load-or-train rule."""
+    and the training configuration ``train_config`` (a dict, as stored): the load-or-train rule.
+    ``read``: the stored configuration in today's form (the configuration class's ``read_stored``:
+    fields added after the file was written take the value it was trained with)."""
     path = Path(path)
     if not path.is_file():
         return False
     payload = read_checkpoint(path)
     meta = payload["meta"]
-    return (payload["config"] == dataclasses.asdict(cfg) and meta.get("train_config") == train_config
-            and bool(meta.get("finished")))
+    stored = meta.get("train_config")
+    if isinstance(stored, dict) and read is not None:
+        stored = read(stored)
+    return payload["config"] == dataclasses.asdict(cfg) and stored == train_config and bool(meta.get("finished"))
 
 
 SHIPPED_KINDS = ("vgai", "dagnn")

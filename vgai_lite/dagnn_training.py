@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional, Union
+from typing import ClassVar, Optional, Union
 
 import torch
 from tqdm.auto import tqdm
@@ -75,6 +75,10 @@ class DAGNNTrainConfig:
     radii: tuple = ()
     group_swarms: int = 10
 
+    LEGACY_FIELDS: ClassVar[dict] = {"teams": [], "radii": [], "group_swarms": 10}
+    """Fields added after checkpoints were written, with the value (as stored) that every checkpoint
+    written before them was trained with: no randomisation of N and R (before 2026-12-04)."""
+
     def __post_init__(self) -> None:
         if any(not isinstance(n, int) or isinstance(n, bool) or n < 2 for n in self.teams):
             raise ValueError(f"DAGNNTrainConfig: teams must be whole numbers of drones >= 2, got {self.teams!r}")
@@ -100,6 +104,11 @@ class DAGNNTrainConfig:
 
     def to_dict(self) -> dict:
         return config_dict(self)
+
+    @classmethod
+    def read_stored(cls, d: dict) -> dict:
+        """A configuration as a checkpoint stored it, in today's form (``LEGACY_FIELDS`` filled in)."""
+        return {**cls.LEGACY_FIELDS, **d}
 
 
 @dataclass

@@ -134,7 +134,7 @@ def load_or_train(path: Union[str, Path], cfg: FlockConfig, tcfg, train: Callabl
     Returns (controller, whether it was trained now); the training record is in ``controller.meta``.
     """
     path = Path(path)
-    if not retrain and is_finished_with(path, cfg, tcfg.to_dict()):
+    if not retrain and is_finished_with(path, cfg, tcfg.to_dict(), read=tcfg.read_stored):
         return load_controller(path, device=train_kwargs.get("device")), False
     if path.is_file() and not retrain:
         log.info("%s was trained with another configuration (or did not finish): training again", path.name)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Optional
+from typing import ClassVar, Optional
 
 from .camera import CameraRanges
 from .config import config_dict
@@ -92,6 +92,9 @@ class VGAITrainConfig:
     cnn_hidden: int = 64
     vision: VisionConfig = PAPER_VISION
     warm_starts: bool = False
+    LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True}
+    """Fields added after files were written, with the value every file written before them had (until
+    2026-12-04 every VGAI training warm-started)."""
     expert_episodes: int = 40
     dagger_rounds: int = 4
     episodes_per_round: int = 16
@@ -149,6 +152,16 @@ class VGAITrainConfig:
         return config_dict(self)
 
     @staticmethod
+    def read_stored(d: dict) -> dict:
+        """A configuration as a checkpoint stored it, in today's form (``LEGACY_FIELDS`` and the renderer's
+        later fields filled in with the values it was trained with); as it is if it cannot be read, so
+        that it matches no configuration of today and the model is trained again."""
+        try:
+            return VGAITrainConfig.from_dict(d).to_dict()
+        except (ValueError, TypeError, KeyError):
+            return d
+
+    @staticmethod
     def from_dict(d: dict) -> "VGAITrainConfig":
         """The inverse of ``to_dict``. Every field must be there, and no other: a file that differs was
         written by another version of the training, whose behaviour this class may not reproduce."""
@@ -170,9 +183,7 @@ class VGAITrainConfig:
                          AggregationMLP(self.K, self.F, self.hidden))
 
 
-LEGACY_FIELDS = {"warm_starts": True}
-"""Fields added after files were written, with the value every file written before them had (until
-2026-12-04 every VGAI training warm-started)."""
+LEGACY_FIELDS = VGAITrainConfig.LEGACY_FIELDS
 
 PAPER = VGAITrainConfig()
 """The paper's VGAI: its sensor (one gray frame), F = 24, K - 1 = 3, the CNN of Fig. 2 from random

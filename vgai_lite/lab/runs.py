@@ -220,7 +220,7 @@ def choose_seed() -> dict:
     folder = DATA_DIR / "vgai"
     for name, tcfg in VGAI_SEED_RUNS.items():
         path = folder / "seeds" / f"{name}.pt"
-        if not is_finished_with(path, cfg, tcfg.to_dict()):
+        if not is_finished_with(path, cfg, tcfg.to_dict(), read=tcfg.read_stored):
             raise FileNotFoundError(f"{path} is missing or not a finished training of {name}: "
                                     "run `python -m vgai_lite train-vgai --seeds` first")
         rec = json.loads(path.with_suffix(".json").read_text())

@@ -77,7 +77,7 @@ def obtain(spec: ModelSpec, out: Path, progress: bool = False,
         return None, 0.0, False
     path = model_path(spec, out)
     path.parent.mkdir(parents=True, exist_ok=True)
-    trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict())
+    trained = retrain or not is_finished_with(path, spec.cfg, spec.tcfg.to_dict(), read=spec.tcfg.read_stored)
     start = time.perf_counter()
     if trained:  # otherwise the checkpoint is ready; evaluate_cell loads it in the flight configuration
         # the round check is logged, never used to choose: a quick run logs fewer episodes
