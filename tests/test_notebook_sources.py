@@ -181,3 +181,36 @@ def test_the_model_answers_claims_match_the_outputs_they_discuss():
     out05, md05 = outputs("05_visual_state_cnn.ipynb")
     assert any(line.startswith("Read off this run") for line in out05.splitlines())
     assert "should fall" not in md05 and "should rise" not in md05
+
+
+def undisplayed_prose(code: str) -> list:
+    """Line numbers of ``prose(...)`` calls in a code cell whose Markdown is never shown: a bare call
+    that is not the cell's last statement (Jupyter shows only the last expression's value), or one
+    inside a block. Each such sentence must go through ``display``."""
+    import ast
+
+    try:
+        tree = ast.parse(code)
+    except SyntaxError:  # IPython magics: not Python; such a cell holds no prose
+        return []
+    last = tree.body[-1] if tree.body else None
+    out = []
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)
+                and isinstance(node.value.func, ast.Name) and node.value.func.id == "prose" and node is not last):
+            out.append(node.lineno)
+    return out
+
+
+def test_the_guard_against_undisplayed_prose_finds_it():
+    assert undisplayed_prose('prose("a {x}", x=1)\nprose("b {x}", x=2)') == [1]
+    assert undisplayed_prose('if True:\n    prose("a {x}", x=1)\nx = 2') == [2]
+    assert undisplayed_prose('display(prose("a {x}", x=1))\nprose("b {x}", x=2)') == []
+
+
+@pytest.mark.parametrize("source", SOURCES, ids=lambda p: p.stem)
+def test_every_rendered_sentence_is_displayed(source):
+    cells = [c for c in parse(source.read_text()).cells if c.cell_type == "code"]
+    hidden = [(i, line) for i, c in enumerate(cells) for line in undisplayed_prose(c.source)]
+    assert not hidden, (f"{source.name}: prose(...) whose sentence is never shown, (code cell, line): {hidden}; "
+                        "wrap it in display(...)")

@@ -20,7 +20,7 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.lab.reproduce import PAPER  # noqa: E402
-from vgai_lite.lab.runs import how_trained, training_minutes  # noqa: E402
+from vgai_lite.lab.runs import PAPER_SEEDS, chosen_camera_runs, how_trained, training_minutes  # noqa: E402
 from vgai_lite.book import TEST_SEED  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -55,18 +55,30 @@ TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3 (exact fe
                "vgai_F24_mixture": "VGAI, the book's recipe without the learner flying alone (DAgger's mixture only)"}
 
 
+def _test_labels() -> dict:
+    """TEST_LABELS, then the camera-trained VGAIs notebook 08 chooses and the paper's VGAI (notebook 06)."""
+    labels = dict(TEST_LABELS)
+    for sensor, name in chosen_camera_runs().items():
+        labels[name] = f"VGAI trained through the camera, {sensor} (notebook 08's choice; clean frames here)"
+    for s in PAPER_SEEDS:
+        labels[f"vgai_paper_seed{s}"] = ("The paper's VGAI as the paper describes it (one gray frame, from random "
+                                         f"weights), training seed {s}")
+    return labels
+
+
 def _episodes(rec: dict) -> str:
     return f"{rec['episodes']} of seed {rec['seed']}"
 
 
 def _test_table() -> list:
     """The headline figures on the test episodes (data/test/, tools/test_episodes.py)."""
-    recs = {name: _load(f"data/test/{name}.json") for name in TEST_LABELS if (ROOT / "data" / "test" / f"{name}.json").is_file()}
+    labels = _test_labels()
+    recs = {name: _load(f"data/test/{name}.json") for name in labels if (ROOT / "data" / "test" / f"{name}.json").is_file()}
     first = next(iter(recs.values()))
     rows = ["| controller | relative cost (95% CI) | velocity variance at 2 s / 5 s [m²/s²] | connected at 5 s | "
             "flocked | episodes < 0.05 m (expert) | median closest [m] (expert) |", "|---|---|---|---|---|---|---|"]
     for name, r in recs.items():
-        rows.append(f"| {TEST_LABELS[name]} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
+        rows.append(f"| {labels[name]} | {_ci(r)} | {_flock(r).rsplit(' | ', 1)[0]} | "
                     f"{r['share_connected_at_end']:.0%} | {'yes' if flocked(r) else 'no'} | "
                     f"{r['share_below_0.05m']:.0%} ({r['expert_share_below_0.05m']:.0%}) | "
                     f"{r['median_min_distance']:.3f} ({r['expert_median_min_distance']:.3f}) |")

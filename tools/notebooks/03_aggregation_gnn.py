@@ -72,8 +72,8 @@ for name, col in zip(FEATURE_NAMES, X.reshape(-1, 6).T):
 # %% [markdown]
 # The repulsion features are heavy-tailed: a neighbour at 0.2 m contributes $1/0.2^3 = 125$ to the
 # $1/r^4$ term. The network standardises its input (mean and spread estimated once from the first
-# round of data) and sees the features as they are. We also tried compressing them first with
-# $\operatorname{sign}(x)\log(1+|x|)$ (`feature_transform="signed_log"`); it imitates worse
+# round of data) and sees the features as they are. The alternative, compressing them first with
+# $\operatorname{sign}(x)\log(1+|x|)$ (`feature_transform="signed_log"`), imitates worse
 # (section 6 measures both), so the default is `"none"`.
 #
 # ## 2. The network (eqs. 7-8)

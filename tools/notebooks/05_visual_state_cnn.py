@@ -204,10 +204,9 @@ prose("Stage 1 inside that VGAI training took {inside:.0f} s; the shipped two-fr
       "its own, {alone:.0f} s (its 40 expert episodes flown first included). {verdict}",
       inside=plain_vgai["stage1_seconds"], alone=alone,
       verdict=("They agree within a fifth." if abs(alone / plain_vgai["stage1_seconds"] - 1) < 0.2 else
-               "They differ by more than a fifth, and the work is the same: the shipped estimators were trained "
-               "while other jobs shared the two cores, the VGAI training alone. A recorded time is that of "
-               "the machine as it was; `python -m vgai_lite train-vgai --estimators --retrain` on an idle "
-               "machine measures it again."))
+               "They differ by more than a fifth for the same work: a recorded time is that of the machine as it "
+               "was (each record's provenance says how busy it was); `python -m vgai_lite train-vgai --estimators "
+               "--retrain` on an idle machine measures it again."))
 
 # %% [markdown]
 # How well does each estimate each feature? Correlation with the exact features on held-out expert
@@ -256,9 +255,9 @@ plt.show()
 # ## 4. Where it looks
 #
 # The gradient of an estimated feature with respect to the input image shows which pixels it
-# depends on (a saliency map). For the relative-velocity feature $\sum_j (v_i - v_j)_x$ the saliency
-# gathers in the columns where the neighbours are, nearest ones first, on all four channels: the
-# current frame says where a neighbour is and how far, the difference channels how it moved.
+# depends on (a saliency map). Below, for the relative-velocity feature $\sum_j (v_i - v_j)_x$, on
+# all four channels; the sentence under the figure says how much of it lies in the columns that
+# show a neighbour (a non-empty depth channel) and how much elsewhere.
 
 # %%
 agent = 0
@@ -278,7 +277,14 @@ for k, ax in enumerate(axes):
         ax.axvline(c * vision.render.view_width - 0.5, color="tab:cyan", lw=0.6)
 plt.tight_layout()
 plt.show()
-print("share of the saliency on the two difference channels:", f"{(sal[2:].sum() / sal.sum()).item():.0%}")
+seen = imgs[0, agent, 1].amax(dim=0) > 0  # the columns whose depth channel shows a neighbour
+on_seen = (sal[..., seen].sum() / sal.sum()).item()
+display(prose("{share:.0%} of the saliency lies in the {cols:.0%} of the columns that show a neighbour: {verdict}. "
+              "{diff:.0%} of it is on the two difference channels.", share=on_seen, cols=seen.float().mean().item(),
+              verdict=("it gathers where the neighbours are" if on_seen > 2 * seen.float().mean().item() else
+                       "it spreads well beyond the neighbours' columns, into empty view (the CNN's fully "
+                       "connected layer sees every column)"),
+              diff=(sal[2:].sum() / sal.sum()).item()))
 
 # %% [markdown]
 # ## 5. Exercise 05.1: a residual block that pools rows only

@@ -19,10 +19,9 @@
 # python -m vgai_lite reproduce --quick --out /tmp/q   # every table in miniature, about a minute
 # ```
 #
-# The command reuses trained checkpoints whose configuration matches (the book's shipped DAGNNs
-# and VGAIs), evaluates every controller of a column on the same initial conditions (the test episodes), and
-# stores each cell as soon as it is computed, so an interrupted run resumes where it stopped. This
-# notebook does **not** retrain anything; set `RERUN = True` below to run the command from here.
+# The command reuses the shipped checkpoints whose configuration matches and stores each cell as
+# soon as it is computed, so an interrupted run resumes. This notebook retrains nothing; set
+# `RERUN = True` below to run the command from here.
 #
 # **Learning objectives.** After this notebook you can regenerate the paper's tables with one
 # command, read a relative cost with its spread, and say which of the paper's findings our
@@ -54,39 +53,27 @@ if RERUN:
 results = load_results()  # the committed full run: data/results/results.json
 prov = results["provenance"]
 cs = prov["compute_seconds"]
-print(f"results assembled {prov['started']} at commit {(prov['git_commit'] or '?')[:10]}: {cs['cells']} cells, "
-      f"{cs['cells_computed_now']} computed by that invocation, the others read back from data/results/cells/")
+print(f"{cs['cells']} cells (data/results/results.json; its provenance says how and when each was computed)")
 print("settings:", prov["reproduce_config"])
 if prov["reproduce_config"]["seed"] != TEST_SEED:
     display(Markdown(f"**Careful: these tables are not yet on the test episodes.** They were computed on seed "
                      f"{prov['reproduce_config']['seed']}, the working episodes, with VGAIs not trained with the book's recipe "
                      "before the learner-alone recipe (notebook 06, section 6, row 4); `python -m vgai_lite reproduce` "
                      f"recomputes them on the test episodes (seed {TEST_SEED}) with the VGAIs shipped now."))
-print("\nthe invocations of the command that computed these results (newest last):")
-for inv in prov.get("invocations", []):
-    print(f"  {inv['started']}  {inv['command']}\n      {inv['wall_seconds'] / 60:5.1f} min wall, "
-          f"{inv['models_trained_now']} models trained, {inv['cells_computed_now']} cells computed "
-          f"(tables {' '.join(inv['tables'])}){'  [from scratch]' if inv['retrain'] else ''}")
 
 # %% [markdown]
 # ## How the experiments are set up, and where the paper is silent
 #
-# * **Time.** The list above gives each invocation's wall time on this 2-core machine. A run that
-#   finds the book's shipped checkpoints only evaluates; `reproduce --retrain --seeds 1` trains every
-#   model the tables need anew, one training seed each (the VGAIs with F = 24 and K - 1 = 1, 2, 3
-#   share their first training stage, which does not depend on K).
+# * **Time.** A run that finds the book's shipped checkpoints only evaluates; `reproduce --retrain`
+#   trains every model the tables need anew (the VGAIs with K - 1 = 1, 2, 3 share their first stage).
 # * **Same episodes for everyone.** Every cell of a column is flown from the same initial
-#   conditions: by default the book's test episodes (seed `TEST_SEED`, notebook 01), on which nothing
-#   was chosen (the settings above name the seed of this run); the relative cost of a cell is the mean of its costs over the mean of the expert's
-#   on those episodes, with a 95% bootstrap interval.
+#   conditions, by default the test episodes (the settings above name this run's seed); a cell's
+#   relative cost is the mean of its costs over the expert's, with a 95% bootstrap interval.
 # * **Episodes per cell**: 30 for $N' \le 75$ and 10 for $N' \ge 100$, where every VGAI drone renders
-#   and processes a view of all the others at every step. The headline figures of notebook 06
-#   (section 3) are the first 50 test episodes of the same seed, so a table's default cell and the
-#   headline differ only by the episodes they average.
+#   a view of all the others at every step.
 # * **Training seeds.** The DAGNN rows are trained with three seeds and report the mean over seeds
 #   with its standard deviation; VGAI rows use one seed (a VGAI training costs far more than a
-#   DAGNN's: notebook 06's Table 1a section and notebook 09 list each record's time), and notebook 06
-#   shows how far three seeds of one configuration land.
+#   DAGNN's; notebook 09 lists each record's time).
 # * **Tables 2a and 2b** (initial velocity, radius): the paper does not say whether it retrains. Its
 #   section is about robustness, so the rows DAGNN and VGAI are the controllers trained at the
 #   defaults ($v_{init} = 3$, $R = 1.5$) and flown in each condition; the row *DAGNN (retrained)*
@@ -94,14 +81,11 @@ for inv in prov.get("invocations", []):
 # * **Table 3**: trained on $N = 50$, flown by $N'$ agents. At $N' \ge 75$ the paper's rejection
 #   sampling of initial conditions practically never accepts a draw, so those episodes come from
 #   our "repair" sampler (notebook 01).
-# * **Our simulator is not AirSim**: the paper's drones fly in AirSim with its physics and cameras;
-#   ours are the paper's stated double integrators and our own renderer. Numbers need not match;
-#   the findings should.
+# * **Our simulator is not AirSim**: ours are the paper's stated double integrators and our own
+#   renderer. Numbers need not match; the findings should.
 # * **Which VGAI.** Every VGAI row flies one of the VGAIs the book ships (F = 6, 12, 24 and
-#   K - 1 = 1, 2, 3), trained with the book's recipe (notebook 06, section 6); a cell flown by a VGAI
-#   of another recipe would be marked †. The row *VGAI (retrained)* of Table 2b is the same recipe
-#   trained at each radius (`reproduce --extras`: two more VGAI trainings; the settings above say
-#   whether this run has it).
+#   K - 1 = 1, 2, 3); a cell flown by a VGAI of another recipe than the book's is marked †. The row
+#   *VGAI (retrained)* of Table 2b is trained at each radius (`reproduce --extras`).
 
 # %%
 def cell(table, row, col):
@@ -183,10 +167,9 @@ for pair in (("F", "K"), ("v_init", "R"), ("N",)):
 # ## The paper's findings, checked against our numbers
 #
 # Each line is computed from the tables above by one criterion (`vgai_lite/lab/findings.py`): a cost is
-# lower than another when their intervals do not overlap (the 95 % bootstrap interval over episodes
-# for a row of one training; mean ± 1.96 × spread / √seeds for the DAGNN rows, three training seeds),
-# and a trend holds when every step of it is such a difference. "Cannot tell" means the differences
-# are within the intervals. The paper's column reads its printed numbers (it reports no intervals).
+# lower than another when their intervals do not overlap (over episodes for one training; mean ±
+# 1.96 × spread / √seeds over the DAGNN's three training seeds), and a trend holds when every step is
+# such a difference; otherwise "cannot tell". The paper's column reads its printed numbers.
 
 # %%
 def cells_of(table, row):
@@ -268,13 +251,10 @@ prose("{text}", text="\n\n".join(bounds) if bounds else
 # ## Collisions: what the cost does not see
 #
 # The cost of eq. 1 only measures velocity disagreement; a controller could flock well and crash.
-# For every cell: the closest any pair came in any episode, the median over episodes of each
-# episode's closest approach, and the share of episodes with a pair closer than 0.05 m, the expert's
-# beside them on the same episodes. A drone's body in our renderer and pymunk is a 5 cm-radius
-# cylinder, so 0.1 m is contact and 0.05 m is bodies half into each other: a crash, not a graze,
-# the threshold notebook 01 chose for "as safe as the expert" (notebook 06's headline table shows
-# both). Summarised per controller over all its cells (set
-# `SHOW_EVERY_CELL` to see each):
+# For every cell: the closest any pair came, the median of each episode's closest approach, and the
+# share of episodes with a pair closer than 0.05 m, the expert's beside them. A drone is a 5 cm-radius
+# cylinder, so 0.05 m is bodies half into each other: a crash, the threshold of notebook 01's "as safe
+# as the expert". Summarised per controller over its cells (`SHOW_EVERY_CELL` shows each):
 
 # %%
 by_row = {}
@@ -312,11 +292,9 @@ if SHOW_EVERY_CELL:
 #
 # In the delayed aggregation (eq. 6) a drone's $k$-th block at time $t$ is the sum of its
 # neighbours' $(k-1)$-th blocks at $t-1$. So at every step each drone broadcasts its blocks
-# $0, \dots, K-2$ of the previous step: $(K-1)\,F$ numbers, $4 (K-1) F$ bytes as float32, whatever
-# the number of neighbours (one broadcast). Over point-to-point links it sends that to each
-# neighbour, so the mean degree (measured below on expert flights) multiplies it. At $T_s = 0.01$ s
-# there are 100 steps per second. The DAGNN exchanges its 6 exact features; VGAI its $F$ learned
-# ones, and nothing of its images.
+# $0, \dots, K-2$ of the previous step: $(K-1)\,F$ numbers, $4 (K-1) F$ bytes as float32 in one
+# broadcast (over point-to-point links, times the mean degree, measured below). The DAGNN exchanges
+# its 6 exact features; VGAI its $F$ learned ones, and nothing of its images.
 
 # %%
 cfg = FlockConfig()
@@ -544,35 +522,26 @@ display(Markdown("\n".join(bullets)))
 # %% [markdown]
 # * **Our DAGNN is better than the paper's.** Our simulator is exactly the model the expert and the
 #   DAGNN assume (a noiseless double integrator, exact relative positions and velocities, no
-#   latency), while the paper's AirSim drones have their own flight dynamics between command and
-#   motion. Imitation is easier when the expert's model is the world. At $R = 2$ m our DAGNN even
-#   scores below 1 (the findings table): the expert is a hand-designed potential-field controller,
-#   not the minimiser of eq. 1, so a learned controller can beat its cost.
-# * **Our VGAI is cheaper than the paper's too** (the cell before; the ratio VGAI / DAGNN is in the
-#   first line of the discussion above). It must infer velocities from two rendered frames of
-#   12 × 128 pixels, with a CNN sized to train on two CPU cores; what made it flock (notebook 06,
-#   section 6) also made it cheaper (its ablation starts from the paper's recipe).
+#   latency); imitation is easier when the expert's model is the world. At $R = 2$ m our DAGNN even
+#   scores below 1: the expert is a hand-designed potential field, not the minimiser of eq. 1.
+# * **Our VGAI is cheaper than the paper's too, but it is not the paper's VGAI.** Flown as the paper
+#   describes it (one gray frame, from random weights), ours learns nothing to act on at the book's
+#   budget (notebook 06); the departures notebook 06 measures are what separate the two.
 # * **The radius table.** Our rows DAGNN and VGAI are trained at $R = 1.5$ and flown at 1.0 and 2.0;
 #   the paper does not say whether it retrained, so the row *DAGNN (retrained)* trains one at each
 #   radius. The DAGNN follows the paper: a larger radius helps, flown or retrained, and retraining
-#   matters most at $R = 1$ m, where fewer neighbours carry less information. Why VGAI gains little
-#   from a larger radius is, we believe, in what the drones see: in our 12 × 128 panorama (2.8° per
-#   column) a 5 cm drone 2 m away spans about one column, one 0.5 m away about four, and our rendered
-#   fog fades distant drones (contrast $e^{-d/4}$), so the extra, distant neighbours a 2 m radius
-#   adds are the ones the CNN sees worst. The paper's AirSim cameras give each drone far more
-#   pixels. Our local heuristic collapses at $R = 1$ m much more than the paper's: with one-hop
-#   information only and few neighbours, our swarms break apart (notebook 01 shows how sensitive it
-#   is to the potential's radius $\rho$).
-# * **Initial velocity, the DAGNN and Local.** Our DAGNN's row does not rise steadily with
-#   $v_{init}$ (the findings table). Retraining the DAGNN on slow starts ($v_{init} = 1$) does
-#   *worse* than flying the default one there (the line above); we have not investigated why. Our
-#   local heuristic's *relative* cost falls as $v_{init}$ grows: relative cost divides by the
-#   expert's cost, which grows faster with $v_{init}$ than the local heuristic's (the cell above).
+#   matters most at $R = 1$ m, where fewer neighbours carry less information. VGAI gains little
+#   from a larger radius, and what the drones see would explain it: in our 12 × 128 panorama a
+#   5 cm drone 2 m away spans about one column and the fog fades it (contrast $e^{-d/4}$), so the
+#   distant neighbours a 2 m radius adds are the ones the CNN sees worst. Our local heuristic
+#   collapses at $R = 1$ m much more than the paper's (notebook 01 shows how sensitive it is to $\rho$).
+# * **Initial velocity.** Our DAGNN's row does not rise steadily with $v_{init}$, and retrained on
+#   slow starts it does worse there than the default one (the line above). Our local heuristic's
+#   *relative* cost falls as $v_{init}$ grows: the expert's cost grows faster (the cell above).
 # * **Spread.** Differences smaller than the intervals are not evidence either way, in ours or (no
 #   spread reported) in the paper's. The DAGNN's spread over three training seeds is often larger
-#   than its interval over episodes (compare the ± with the intervals of notebook 03), and VGAI's
-#   training-to-training spread (notebook 06's three training seeds) may be larger still, so one training per cell, as for our VGAI rows and, as far as it says, the
-#   paper's, understates the uncertainty.
+#   than its interval over episodes, so one training per cell, as for our VGAI rows and the paper's,
+#   understates the uncertainty (notebook 06 flies three seeds of the book's VGAI).
 # * **Scaling.** With the symmetric-normalised GSO what a drone aggregates stays on the same scale
 #   as its degree grows (notebook 03 shows the un-normalised GSO failing at 100); VGAI's images do
 #   not: more drones crowd each panorama.
@@ -663,17 +632,10 @@ prose("* **A depth channel.** The paper's cameras give images only; ours give ea
 #
 # ## What's next
 #
-# * More training seeds for VGAI (`--vgai-seeds 3`, five more VGAI trainings per extra seed; the
-#   appendix's projection says how long on M machines) would give the VGAI rows a spread over training,
-#   as the DAGNN rows have.
-# * The cells where VGAI does not flock (marked in the tables above) are where a better VGAI
-#   training would show first; notebook 09 lists the open problems with the measurement behind each.
-# * The exercises of notebooks 01-08 can be graded automatically; see the README's section for
-#   instructors.
-# * The same reproduction on several machines, with Ray, and how long it would take: the
-#   [appendix](10_appendix_ray.ipynb).
-# * [Notebook 08](08_robustness.ipynb) flies the same controllers in harsher worlds than the
-#   paper's: noisy and dead cameras, lost and late messages.
+# * More training seeds for VGAI (`--vgai-seeds 3`) would give the VGAI rows a spread over training;
+#   the [appendix](10_appendix_ray.ipynb) says how long that takes on several machines, with Ray.
+# * [Notebook 08](08_robustness.ipynb) flies the same controllers in harsher worlds: noisy and dead
+#   cameras, lost and late messages; notebook 09 lists the open problems.
 
 # %% [markdown]
 # ## References

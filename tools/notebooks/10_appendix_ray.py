@@ -52,18 +52,18 @@ results = load_results()  # the committed full run: data/results/results.json
 from vgai_lite.lab.ray_runner import projected_hours
 
 rq = json.loads((DATA_DIR / "experiments" / "ray_quick.json").read_text())
-prose("The quick run, alone on this {cpus}-core machine (`{cmd}`): **{s2:.0f} s** serially with two torch "
-      "threads (the command's default), {s1:.0f} s serially with one, and **{r:.0f} s** on Ray (two CPUs, one "
-      "thread per task, {tasks} tasks): {ratio:.2f}× the default serial run. The Ray run's tables are "
-      "{eq} the one-thread serial run's. {why}",
-      cpus=rq["cpus"], cmd=rq["command"], s2=rq["serial_2_threads_seconds"], s1=rq["serial_1_thread_seconds"],
-      r=rq["ray_seconds"], ratio=rq["ray_over_serial"], tasks=rq["ray"]["tasks"]["trainings"] + rq["ray"]["tasks"]["cells"],
-      eq="identical to" if rq["ray_equals_serial_1_thread"] else "NOT identical to",
-      why=("On two cores Ray does not win: the serial run already keeps both cores busy with two threads, and Ray "
-           "adds its start-up and its workers' imports; it pays once there are more cores than one task can use."
-           if rq["ray_over_serial"] >= 1 else
-           "Even on two cores Ray wins a little: two one-thread tasks at once use the cores better than one task "
-           "of two threads, whose small tensors leave the second thread idle much of the time."))
+display(prose("The quick run, alone on this {cpus}-core machine (`{cmd}`): **{s2:.0f} s** serially with two torch "
+              "threads (the command's default), {s1:.0f} s serially with one, and **{r:.0f} s** on Ray (two CPUs, one "
+              "thread per task, {tasks} tasks): {ratio:.2f}× the default serial run. The Ray run's tables are "
+              "{eq} the one-thread serial run's. {why}",
+              cpus=rq["cpus"], cmd=rq["command"], s2=rq["serial_2_threads_seconds"], s1=rq["serial_1_thread_seconds"],
+              r=rq["ray_seconds"], ratio=rq["ray_over_serial"], tasks=rq["ray"]["tasks"]["trainings"] + rq["ray"]["tasks"]["cells"],
+              eq="identical to" if rq["ray_equals_serial_1_thread"] else "NOT identical to",
+              why=("On two cores Ray does not win: the serial run already keeps both cores busy with two threads, and Ray "
+                   "adds its start-up and its workers' imports; it pays once there are more cores than one task can use."
+                   if rq["ray_over_serial"] >= 1 else
+                   "Even on two cores Ray wins a little: two one-thread tasks at once use the cores better than one task "
+                   "of two threads, whose small tensors leave the second thread idle much of the time.")))
 
 machines = (1, 2, 4, 8, 16)
 proj = [projected_hours(results, DATA_DIR / "results", m) for m in machines]
