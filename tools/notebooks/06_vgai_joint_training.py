@@ -594,6 +594,34 @@ prose("{k} of {n} training seeds flock; their relative costs run from {lo:.2f} t
                "Most seeds do not flock: the recipe is not settled."))
 
 # %% [markdown]
+# **Leave one out.** The book's recipe without one of its departures from the paper at a time,
+# training seed 0, on the same validation episodes. The three seeds above are the yardstick: a row
+# differs from the recipe when its interval lies outside the recipe's over the three seeds (mean ±
+# 1.96 × their spread / √3), by the one rule of `vgai_lite/lab/findings.py`. Each row's command is in
+# its record (`data/experiments/`).
+
+# %%
+LEAVE_ONE_OUT = [("without the learner flying alone (DAgger's mixture only)", "vgai_F24_validation"),
+                 ("without the depth channel (gray and its motion channel)", "vgai_learner_gray"),
+                 ("without the warm starts (joint BPTT from random weights)", "vgai_book_no_warm")]
+loo = {label: json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text()) for label, name in LEAVE_ONE_OUT}
+assert all((r["seed"], r["episodes"]) == (some["seed"], some["episodes"]) for r in loo.values())
+recipe = {"relative_cost_mean": sum(lc) / len(lc), "per_seed": lc, "seed_std": float(np.std(lc, ddof=1))}
+lo_r, hi_r = findings.interval(recipe)
+display(Markdown(HEADER.format(what="the book's recipe")
+                 + f"| over its {len(lc)} training seeds | **{recipe['relative_cost_mean']:.2f}** ({lo_r:.2f}-{hi_r:.2f}) "
+                   f"| | {np.median(lv):.1e} (median) | | {n_flocked} of {len(lc)} | | |\n"
+                 + "\n".join(row(label, r) for label, r in loo.items())))
+says = {-1: "costs less than the recipe", 1: "costs more than the recipe", 0: "cannot be told from the recipe"}
+display(prose("{lines}. {verdict}",
+              lines="; ".join(f"*{label.split(' (')[0]}* {says[findings.compare(r, recipe)]} ({r['relative_cost_mean']:.2f}, "
+                              f"variance at 5 s {r['velocity_variance_median']['5s']:.1e} m²/s², "
+                              f"{'flocked' if flocked(r) else 'did not flock'})" for label, r in loo.items()),
+              verdict=("Without any one of them the recipe no longer flocks." if not any(flocked(r) for r in loo.values())
+                       else "Still flocking without it: " + ", ".join(l.split(" (")[0] for l, r in loo.items() if flocked(r))
+                       + ".")))
+
+# %% [markdown]
 # **What the depth channel buys.** The paper's drones see camera images; ours see a gray channel
 # *and* a depth channel, which makes distances free. The book's recipe (seed 0) trained with the
 # gray channel only (and the motion channel of it), on the same validation episodes
