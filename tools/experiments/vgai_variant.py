@@ -65,6 +65,8 @@ def main(argv=None) -> int:
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--sensor", choices=("paper", "book"), default=None,
                    help="the vision: the paper's (PAPER_VISION: one gray frame) or the book's (gray, depth, motion)")
+    p.add_argument("--motion-gap", type=int, default=None,
+                   help="the motion channel's gap g in steps; 0: one frame, no motion channel (with --motion-features 0)")
     p.add_argument("--warm-starts", choices=("on", "off"), default=None,
                    help="stages 1-2 before the joint training (on: the book's) or joint BPTT from random weights (off)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
@@ -93,6 +95,9 @@ def main(argv=None) -> int:
         ranges = [tuple(float(x) for x in part.split(",")) for part in parts[:4]]
         tcfg = dataclasses.replace(tcfg, camera=CameraRanges(*ranges, dead_share=float(parts[4])))
         changes["camera"] = tcfg.camera.to_dict()
+    if args.motion_gap is not None:  # a change inside the vision configuration: recorded by name
+        tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=args.motion_gap))
+        changes["motion_gap"] = args.motion_gap
     if args.channels is not None:  # a change inside the vision configuration: recorded by name
         channels = tuple(args.channels.split(","))
         render = dataclasses.replace(tcfg.vision.render, channels=channels)
