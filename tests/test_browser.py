@@ -96,7 +96,10 @@ PAGE_STATE = """(() => {
           images: imgs.length, loaded: imgs.filter(i => i.complete && i.naturalWidth > 0).length,
           iframes: frames.length, canvases: canvas,
           dialogs: document.querySelectorAll('.jp-Dialog').length,
-          tracebacks: (text.match(/Traceback \\(most recent call last\\)/g) || []).length};
+          tracebacks: (text.match(/Traceback \\(most recent call last\\)/g) || []).length,
+          mathErrors: nb.querySelectorAll('mjx-merror').length,
+          rawTex: [...nb.querySelectorAll('.jp-MarkdownCell .jp-RenderedMarkdown')]
+                  .filter(m => /\\\\(tag|frac|mathbf|begin)\\b/.test(m.innerText)).length};
 })()"""
 
 
@@ -111,7 +114,7 @@ def test_a_student_sees_every_figure_and_animation(book_in_a_browser, path):
         state = tools.js(PAGE_STATE) or {}
         want_frame = path.stem.startswith("04")
         if (state.get("ready") and state["cells"] == len(nb.cells) and state["loaded"] >= expected
-                and (not want_frame or any(c > 0 for c in state["canvases"]))):
+                and state["rawTex"] == 0 and (not want_frame or any(c > 0 for c in state["canvases"]))):
             break
         time.sleep(0.5)
     assert state.get("ready"), f"{path.name}: JupyterLab showed no notebook within {LOAD_SECONDS} s"
@@ -120,6 +123,8 @@ def test_a_student_sees_every_figure_and_animation(book_in_a_browser, path):
         f"{path.name}: {state['loaded']} of {expected} image outputs drawn and loaded ({state})"
     assert state["dialogs"] == 0, f"{path.name}: an error dialog is open"
     assert state["tracebacks"] == 0, f"{path.name}: an output shows a traceback"
+    assert state["rawTex"] == 0, f"{path.name}: {state['rawTex']} markdown cells show raw TeX (not typeset)"
+    assert state["mathErrors"] == 0, f"{path.name}: MathJax reports an error in an equation"
     if path.stem.startswith("04"):
         assert state["iframes"] >= 1 and any(c > 0 for c in state["canvases"]), \
             f"{path.name}: the meshcat 3-D view is not drawn (iframes {state['iframes']}, canvases {state['canvases']})"

@@ -214,3 +214,59 @@ def test_every_rendered_sentence_is_displayed(source):
     hidden = [(i, line) for i, c in enumerate(cells) for line in undisplayed_prose(c.source)]
     assert not hidden, (f"{source.name}: prose(...) whose sentence is never shown, (code cell, line): {hidden}; "
                         "wrap it in display(...)")
+
+
+PAPER_EQUATIONS = range(1, 11)
+"""The paper's numbered equations (its local heuristic, displayed after eq. 3, carries no number)."""
+
+
+def _markdown(source: Path) -> str:
+    return "\n".join(c.source for c in parse(source.read_text()).cells if c.cell_type == "markdown")
+
+
+def test_every_equation_of_the_paper_is_displayed_once_with_its_number():
+    import re
+
+    tags = [int(n) for src in SOURCES for n in re.findall(r"\\tag\{(\d+)\}", _markdown(src))]
+    assert sorted(tags) == list(PAPER_EQUATIONS), \
+        f"each of eqs. 1-10 displayed once with \\tag{{n}}; found tags {sorted(tags)}"
+    heuristic = _markdown(ROOT / "tools" / "notebooks" / "01_flocking_dynamics_and_expert.py")
+    assert re.search(r"\$\$\s*\\tilde\{\\mathbf u\}_i\(t\) =", heuristic), "01 displays the local heuristic"
+
+
+def test_every_equation_is_named_in_the_docstring_of_the_code_that_implements_it():
+    import ast
+    import re
+
+    named = set()
+    for path in sorted((ROOT / "vgai_lite").rglob("*.py")):
+        tree = ast.parse(path.read_text())
+        nodes = [tree] + [n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.ClassDef))]
+        for node in nodes:
+            doc = ast.get_docstring(node) or ""
+            for a, b in re.findall(r"eqs?\. (\d+)(?:\s*-\s*(\d+))?", doc):
+                named.update(range(int(a), int(b or a) + 1))
+    assert set(PAPER_EQUATIONS) <= named, f"no docstring names eq(s). {sorted(set(PAPER_EQUATIONS) - named)}"
+
+
+def test_every_colourbar_says_what_its_colours_mean():
+    import ast
+
+    for src in SOURCES:
+        for cell in parse(src.read_text()).cells:
+            if cell.cell_type != "code" or "colorbar" not in cell.source:
+                continue
+            tree = ast.parse("\n".join(l for l in cell.source.splitlines() if not l.startswith("%")))
+            for node in ast.walk(tree):
+                if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "colorbar":
+                    assert any(k.arg == "label" for k in node.keywords), \
+                        f"{src.stem}, line {node.lineno} of a cell: a colourbar without a label"
+
+
+def test_every_controller_of_the_book_has_its_own_colour():
+    from vgai_lite.viz import PALETTE, controller_color
+
+    named = {k: v for k, v in PALETTE.items() if k != "centralized"}
+    assert len(set(named.values())) == len(named), "two controllers share a colour"
+    assert controller_color("VGAI, depth camera") == PALETTE["depth camera"] != PALETTE["VGAI"]
+    assert controller_color("the paper's VGAI (one gray frame)") == PALETTE["paper's VGAI"]

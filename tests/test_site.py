@@ -77,6 +77,7 @@ PAGE_STATE = """(async () => {
   return {ready: true, title: document.title,
           maths: maths.length, typeset: maths.filter(m => m.querySelector('mjx-container')).length,
           mathErrors: document.querySelectorAll('mjx-merror, .MathJax_Error').length,
+          rawTables: [...document.querySelectorAll('.cell_output')].filter(o => o.innerText.includes('|---|')).length,
           images: imgs.length, loaded: imgs.filter(i => i.complete && i.naturalWidth > 0).length,
           next: next ? next.getAttribute('href') : null,
           downloads: [...document.querySelectorAll('a.download, a.reference.download')].map(a => a.getAttribute('href')),
@@ -114,6 +115,7 @@ def test_a_reader_sees_equations_figures_and_the_way_on(site, chapter):
     assert state.get("ready"), f"{chapter}: the page did not load within {LOAD_SECONDS} s"
     assert state["typeset"] == state["maths"], f"{chapter}: {state['maths'] - state['typeset']} equations not typeset"
     assert state["mathErrors"] == 0, f"{chapter}: MathJax reports an error in an equation"
+    assert state["rawTables"] == 0, f"{chapter}: {state['rawTables']} outputs show a Markdown table as raw text"
     if chapter[:2] in ("01", "02", "03", "05", "06"):
         assert state["maths"] > 0, f"{chapter}: no equation found on a chapter that has them"
     if chapter[:2] not in ("09", "10"):  # the closing chapter and the appendix are tables and prose only
@@ -155,3 +157,45 @@ def test_without_the_site_packages_the_command_says_how_to_install_them(monkeypa
     monkeypatch.setattr(iu, "find_spec", lambda name, *a: None)
     with pytest.raises(SystemExit, match="requirements-site.txt"):
         website.check_installed()
+
+
+RAW_LATEX = ("$$", "\\mathbf", "\\frac", "\\tag{", "\\begin{", "\\sum", "\\mathcal", "\\big")
+"""What a page would show if MathJax had not typeset an equation."""
+
+
+def _plain(text: str) -> str:
+    import re
+
+    return re.sub(r"\s+", " ", text).strip()
+
+
+def test_the_book_prints_as_one_pdf_with_every_chapter_where_its_contents_say(site, tmp_path):
+    """``python -m vgai_lite pdf``: the site printed by Chromium. Each chapter's title is on the page
+    the contents give for it, no page shows raw TeX, the outline lists the chapters, figures are there."""
+    import nbformat
+    from pypdf import PdfReader
+
+    from vgai_lite.lab import pdf
+
+    _, _, built = site
+    info = pdf.build(tmp_path / "book.pdf", site=built["out"])
+    reader = PdfReader(info["out"])
+    assert len(reader.pages) == info["pages"]
+    assert 12 + 2 <= info["pages"] <= 600, f"{info['pages']} pages: expected the landing page and 11 chapters"
+    titles = [nbformat.read(ROOT / "notebooks" / f"{c}.ipynb", as_version=4).cells[0].source.splitlines()[0]
+              .lstrip("# ").strip() for c in CHAPTERS]
+    assert [t.replace("’", "'") for t, _ in info["chapters"]][1:] == titles, info["chapters"]  # Sphinx's smart quotes
+    texts = [_plain(p.extract_text() or "") for p in reader.pages]
+    contents = texts[1]
+    for title, page in info["chapters"]:
+        assert _plain(title) in contents and str(page) in contents
+        assert _plain(title) in texts[page - 1], f"{title!r} is not on page {page}, where the contents put it"
+    raw = [(i + 1, s) for i, t in enumerate(texts) for s in RAW_LATEX if s in t]
+    assert not raw, f"raw TeX on pages {raw[:8]}"
+    assert [o.title for o in reader.outline] == [t for t, _ in info["chapters"]]
+    images = sum(len(p.images) for p in reader.pages)  # image objects, counted without decoding them
+    figures = sum(1 for c in CHAPTERS for cell in nbformat.read(ROOT / "notebooks" / f"{c}.ipynb", as_version=4).cells
+                  if cell.cell_type == "code" for o in cell.get("outputs", [])
+                  if any(k.startswith("image/") for k in o.get("data", {})))
+    assert images >= figures, f"{images} images in the PDF, {figures} figures and animations in the notebooks"
+    assert info["animations"] >= 3, "the book's animations (01, 04, 06, ...) are printed as their first frame"

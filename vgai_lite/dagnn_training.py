@@ -53,7 +53,7 @@ class DAGNNTrainConfig:
             training's swarms fly with (``flight_groups``): each round's swarms fly in groups of
             ``group_swarms``, each group with its N drawn from ``teams`` and its R uniform in
             ``radii``. Empty (the paper's): every swarm flies the training's configuration. The
-            features (eq. 9) and the GSO follow each group's R, the expert's action does not
+            features (the rows of eq. 4) and the GSO follow each group's R, the expert's action does not
             depend on R; the authors' released code draws R from U(1.0, 3.5) m per sample.
         group_swarms: swarms per group of ``teams`` and ``radii``.
     """

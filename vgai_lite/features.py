@@ -22,7 +22,8 @@ FEATURE_NAMES = ("sum dv_x", "sum dv_y", "sum r_x/r^4", "sum r_y/r^4", "sum r_x/
 
 
 def local_features(r: torch.Tensor, v: torch.Tensor, R: float) -> torch.Tensor:
-    """The 6 exact local features of every agent. r, v: (B, N, 2) -> X: (B, N, 6).
+    """The 6 exact local features of every agent: the state matrix X(t) of eq. 4, one row x_i(t)
+    per agent. r, v: (B, N, 2) -> X: (B, N, 6).
 
     Order: [sum (v_i - v_j) (x, y), sum r_ij/||r_ij||^4 (x, y), sum r_ij/||r_ij||^2 (x, y)].
     ||r_ij|| is floored at config.DISTANCE_FLOOR (1 mm), as in the expert's potential: coincident

@@ -38,7 +38,7 @@ from vgai_lite import (ExpertController, FlockConfig, LocalController, flocking_
 from vgai_lite.book import WORKING_SEED, QUICK, VALIDATION_SEED, pick, prose, threads
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.evaluate import CLOSE_CALLS, FLOCK_TIMES, FLOCKED_CONNECTED, FLOCKED_VARIANCE
-from vgai_lite.viz import (PALETTE, animate_swarms, animation_image, draw_swarm, plot_trajectories,
+from vgai_lite.viz import (PALETTE, animate_swarms, controller_color, animation_image, draw_swarm, plot_trajectories,
                            plot_velocity_variance, velocity_variance)
 
 torch.set_num_threads(threads())  # 2, or VGAI_LITE_THREADS (vgai_lite.book)
@@ -160,10 +160,15 @@ plt.show()
 # %% [markdown]
 # ## 4. The flocking cost (eq. 1) and the relative cost
 #
-# Flocking means every agent flies with the same velocity. The cost sums, over time, the
-# velocity variance across the swarm:
+# Flocking means every agent flies with the same velocity. The paper states it as a problem over
+# the accelerations:
 #
-# $$ C = \sum_{t=0}^{T-1} \frac{1}{N} \sum_{i=1}^{N} \Big\| \mathbf v_i(t) - \frac1N \sum_{j=1}^N \mathbf v_j(t) \Big\|^2 .$$
+# \begin{equation*}
+# \min_{\substack{\mathbf u_i(t)\\ i=1,\dots,N\\ t\ge 0}} \frac{1}{N} \sum_{t} \sum_{i=1}^{N} \Big\| \mathbf v_i(t) - \frac1N \sum_{j=1}^N \mathbf v_j(t) \Big\|^2 . \tag{1}
+# \end{equation*}
+#
+# Its objective, summed over the $T$ steps of a flight, is the **flocking cost** $C$ of a controller:
+# the velocity variance across the swarm, summed over time (`vgai_lite.flocking_cost`).
 #
 # It ignores positions entirely: a swarm can score well while two drones touch. The paper reports
 # every controller's cost **relative to the centralized expert's** on the same initial conditions
@@ -197,9 +202,12 @@ prose("A controller **flocked** when, over the episodes it flew, the median velo
 # The expert (Tolstaya et al. 2019, eq. 10) steers every agent's velocity toward every other
 # agent's and pushes agents apart through a potential:
 #
-# $$ \mathbf u_i^* = -\sum_{j=1}^{N} (\mathbf v_i - \mathbf v_j) - \sum_{j=1}^N \nabla_{\mathbf r_i} U(\mathbf r_i, \mathbf r_j), \qquad
-#    U = \begin{cases} 1/\|\mathbf r_{ij}\|^2 - \log \|\mathbf r_{ij}\|^2 & \|\mathbf r_{ij}\| \le \rho \\
-#    1/\rho^2 - \log \rho^2 & \text{otherwise,} \end{cases}$$
+# $$ \mathbf u_i^*(t) = -\sum_{j=1}^{N} \big(\mathbf v_i(t) - \mathbf v_j(t)\big) - \sum_{j=1}^N \nabla_{\mathbf r_i(t)} U\big(\mathbf r_i(t), \mathbf r_j(t)\big), \tag{2}$$
+#
+# \begin{equation*}
+# U(\mathbf r_i, \mathbf r_j) = \begin{cases} 1/\|\mathbf r_{ij}\|^2 - \log \|\mathbf r_{ij}\|^2 & \text{if } \|\mathbf r_{ij}\| \le \rho \\
+#    1/\rho^2 - \log \rho^2 & \text{otherwise,} \end{cases} \qquad \mathbf r_{ij} = \mathbf r_i - \mathbf r_j, \tag{3}
+# \end{equation*}
 #
 # saturated per axis to ±30 m/s². Three remarks:
 #
@@ -243,8 +251,11 @@ print(inspect.getsource(controllers.expert_control).split('"""')[-1])
 # ## 6. The local heuristic
 #
 # The natural decentralized controller computes eq. 2 with both sums restricted to the neighbours
-# $\mathcal N_i(t) = \{ j : \|\mathbf r_i - \mathbf r_j\| \le R \}$. It uses present, one-hop
-# information only. Since $\rho < R$, its repulsion equals the expert's; only the alignment differs:
+# $\mathcal N_i(t) = \{ j : \|\mathbf r_i - \mathbf r_j\| \le R \}$ (the paper displays it without a number):
+#
+# $$ \tilde{\mathbf u}_i(t) = -\sum_{j\in\mathcal N_i(t)} \big(\mathbf v_i(t) - \mathbf v_j(t)\big) - \sum_{j\in\mathcal N_i(t)} \nabla_{\mathbf r_i(t)} U\big(\mathbf r_i(t), \mathbf r_j(t)\big).$$
+#
+# It uses present, one-hop information only. Since $\rho < R$, its repulsion equals the expert's; only the alignment differs:
 # each agent aligns with its neighbours, not with the swarm. This is the paper's **upper bound**: a
 # learned decentralized controller should do better by listening to neighbours' neighbours.
 
@@ -280,7 +291,7 @@ print(f"{2 * len(r0)} episodes of {cfg.T} steps in {time.perf_counter() - t0:.2f
 
 fig, axes = plt.subplots(1, 2, figsize=(11, 5))
 for ax, (name, traj) in zip(axes, trajs.items()):
-    plot_trajectories(ax, traj, b=0)
+    plot_trajectories(ax, traj, b=0, color=controller_color(name))
     ax.set_title(f"{name}: paths over {cfg.T * cfg.Ts:.0f} s (o = start)")
 plt.tight_layout()
 plt.show()
@@ -299,7 +310,7 @@ axes[0].set_ylim(bottom=1e-6)
 axes[0].set_title("velocity variance across the swarm")
 for name, traj in trajs.items():
     t = np.arange(cfg.T) * cfg.Ts
-    axes[1].plot(t, traj.u.abs().amax(-1).mean((1, 2)), label=name)
+    axes[1].plot(t, traj.u.abs().amax(-1).mean((1, 2)), label=name, color=controller_color(name))
 axes[1].axhline(cfg.u_max, color="0.6", lw=0.8, ls="--")
 axes[1].set_xlabel("time [s]"), axes[1].set_ylabel("mean over agents of max(|u_x|, |u_y|) [m/s²]")
 axes[1].set_title("how hard the controllers push (saturation at 30)"), axes[1].legend()

@@ -96,12 +96,17 @@ plt.show()
 # %% [markdown]
 # ## 3. $\mathbf S\mathbf X$ is one round of exchanges
 #
-# Stack one feature vector per agent in $\mathbf X \in \mathbb R^{N\times F}$. Because $\mathbf S$ is
-# zero off the graph,
+# Stack one feature vector per agent, row by row, in the state matrix
 #
-# $$[\mathbf S\mathbf X]_{if} = \sum_{j\in\mathcal N_i} s_{ij}\,[\mathbf x_j]_f \qquad (\text{eq. 5}):$$
+# \begin{equation*}
+# \mathbf X(t) = \begin{bmatrix} \mathbf x_1^\top(t) \\ \vdots \\ \mathbf x_N^\top(t) \end{bmatrix} \in \mathbb R^{N\times F}. \tag{4}
+# \end{equation*}
 #
-# agent $i$ needs only the values its neighbours send it. The matrix product is a *description* of
+# Because $\mathbf S$ is zero off the graph,
+#
+# $$[\mathbf S(t)\mathbf X(t)]_{if} = \sum_{j\in\mathcal N_i(t)} s_{ij}(t)\,[\mathbf x_j(t)]_f \tag{5}$$
+#
+# for each feature $f$: agent $i$ needs only the values its neighbours send it. The matrix product is a *description* of
 # what every drone computes in parallel from its own inbox. Let us check it for one agent, computing
 # from its inbox only:
 
@@ -153,7 +158,7 @@ print("mean number of agents within k hops, k = 0..5:", [round(h, 1) for h in ho
 # A drone cannot do $K-1$ exchanges *instantly*: each exchange takes one time step, and the graph
 # moves in between. So the paper builds, with $K$ taps,
 #
-# $$\mathbf Z(t) = \big[\mathbf X(t),\ \mathbf S(t)\mathbf X(t-1),\ \mathbf S(t)\mathbf S(t-1)\mathbf X(t-2),\ \dots,\ \mathbf S(t)\cdots\mathbf S(t-K+2)\,\mathbf X(t-K+1)\big] \in \mathbb R^{N\times KF}.$$
+# $$\mathbf Z(t) = \big[\mathbf X(t),\ \mathbf S(t)\mathbf X(t-1),\ \mathbf S(t)\mathbf S(t-1)\mathbf X(t-2),\ \dots,\ \mathbf S(t)\cdots\mathbf S(t-K+2)\,\mathbf X(t-K+1)\big] \in \mathbb R^{N\times KF}. \tag{6}$$
 #
 # Block $k$ holds what agents $k$ hops away measured $k$ steps ago. It obeys a one-step recursion,
 # $\mathbf Z_k(t) = \mathbf S(t)\,\mathbf Z_{k-1}(t-1)$: at every step each agent sends its neighbours the

@@ -103,8 +103,13 @@ print(DAGNNController(model, cfg))
 # ## 3. Imitation data, and where the labels live
 #
 # Imitation learning (eqs. 9-10): fly swarms, record every agent's $\mathbf z_i(t)$ with the expert's
-# action $\mathbf u_i^*(t)$ at that state (eq. 9 stacks them into $\mathbf U^*(t)$), and fit
-# $\mathrm{NN}_\Theta$ to them over the set $\mathcal T$ of recorded states:
+# action $\mathbf u_i^*(t)$ at that state, stacked like the states of eq. 4,
+#
+# \begin{equation*}
+# \mathbf U^*(t) = \begin{bmatrix} \mathbf u_1^*(t)^\top \\ \vdots \\ \mathbf u_N^*(t)^\top \end{bmatrix} \in \mathbb R^{N\times 2}, \tag{9}
+# \end{equation*}
+#
+# and fit $\mathrm{NN}_\Theta$ to them over the set $\mathcal T = \{(\mathbf X(t), \mathbf U^*(t))_t\}$ of recorded flights:
 #
 # $$ \Theta^* = \operatorname*{argmin}_\Theta \sum_{\mathcal T} \sum_{i=1}^{N}
 #    \big\| \hat{\mathbf u}_i(t) - \mathbf u_i^*(t) \big\|. \tag{10} $$

@@ -159,7 +159,7 @@ for ax, im, title, kw in ((axes[0], now[0], f"I(t), t = {gap * 2} steps", dict(c
     ax.set_xticks([(c + 0.5) * rcfg.view_width for c in range(4)], CAMERAS if ax is axes[2] else [])
     for c in range(1, 4):
         ax.axvline(c * rcfg.view_width - 0.5, color="tab:orange", lw=0.8)
-    fig.colorbar(shown, ax=ax, fraction=0.02, pad=0.01)
+    fig.colorbar(shown, ax=ax, fraction=0.02, pad=0.01, label="difference" if ax is axes[2] else "brightness")
 plt.tight_layout()
 plt.show()
 

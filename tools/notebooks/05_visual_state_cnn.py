@@ -73,7 +73,7 @@ for k, (ax, title) in enumerate(zip(axes, ("gray I(t)", "depth I(t)", "5 (gray d
     ax.set_xticks([(c + 0.5) * rc.view_width for c in range(4)], CAMERAS if k == 3 else [])
     for c in range(1, 4):  # where one camera's view ends and the next begins
         ax.axvline(c * rc.view_width - 0.5, color="tab:orange", lw=0.8)
-    fig.colorbar(shown, ax=ax, fraction=0.015, pad=0.01)
+    fig.colorbar(shown, ax=ax, fraction=0.015, pad=0.01, label=("brightness", "depth code", "difference", "difference")[k])
 plt.tight_layout()
 plt.show()
 
@@ -266,11 +266,11 @@ est.estimate_local_features(x_img)[0, 0].backward()
 sal = x_img.grad[0].abs()
 fig, axes = plt.subplots(5, 1, figsize=(12, 5.5))
 shown = axes[0].imshow(imgs[0, agent, 0], cmap="gray", vmin=0, vmax=1, aspect="auto")
-axes[0].set_ylabel("gray", rotation=0, ha="right"), fig.colorbar(shown, ax=axes[0], fraction=0.015, pad=0.01)
+axes[0].set_ylabel("gray", rotation=0, ha="right"), fig.colorbar(shown, ax=axes[0], fraction=0.015, pad=0.01, label="brightness")
 for k, ax in enumerate(axes[1:]):
     shown = ax.imshow(sal[k], cmap="hot", aspect="auto", vmin=0, vmax=float(sal.max()))
     ax.set_ylabel(("gray", "depth", "Δ gray", "Δ depth")[k] + " saliency", rotation=0, ha="right", fontsize=9)
-    fig.colorbar(shown, ax=ax, fraction=0.015, pad=0.01)
+    fig.colorbar(shown, ax=ax, fraction=0.015, pad=0.01, label="|∂ feature / ∂ pixel|")
 for k, ax in enumerate(axes):
     ax.set_yticks([]), ax.set_xticks([(c + 0.5) * vision.render.view_width for c in range(4)], CAMERAS if k == 4 else [])
     for c in range(1, 4):

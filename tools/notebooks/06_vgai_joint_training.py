@@ -85,9 +85,9 @@ plt.show()
 #    alone (`learner_swarms`); stage 1's state-estimation loss stays on beside the action loss
 #    (`aux_weight`).
 #
-# The CNN's last $F/3$ features are odd in the motion channels (`motion_features`). These four
-# changes to the paper's recipe are what make VGAI flock; section 6 explains each one and measures
-# what it buys. Every knob lives in one configuration object, `VGAITrainConfig`, whose defaults are
+# The CNN's last $F/3$ features are odd in the motion channels (`motion_features`). Section 6
+# explains each of these departures from the paper and measures what it buys, leaving one out at a
+# time. Every knob lives in one configuration object, `VGAITrainConfig`, whose defaults are
 # the paper's VGAI as the paper describes it (`PAPER`: one gray frame per step, no depth, no warm
 # start, eq. 10 alone, DAgger's mixture). The book's recipe is the preset `BOOK`: the paper's with
 # the book's sensor (gray and depth, with the motion channel) and warm starts (stages 1 and 2,
@@ -213,9 +213,8 @@ from vgai_lite.lab.reproduce import load_results
 results = load_results()
 table_F = results["tables"]["F"]
 tables_seed = results["provenance"]["reproduce_config"]["seed"]
-if tables_seed != TEST_SEED:
-    display(Markdown(f"**Careful: this table is not yet on the test episodes**: computed on seed {tables_seed} with the "
-                     "VGAIs shipped before the book's recipe (section 6, row 4); notebook 07 says how to recompute it."))
+assert tables_seed == TEST_SEED, f"the tables were computed on seed {tables_seed}: rerun python -m vgai_lite reproduce"
+assert all(c.get("book_recipe", True) for c in table_F["rows"]["VGAI"].values()), "every F trained with the book's recipe"
 rows, cells = [], {}
 for F in table_F["columns"]:
     c = cells[F] = table_F["rows"]["VGAI"][str(F)]
@@ -225,14 +224,12 @@ for F in table_F["columns"]:
     flown = json.loads((DATA_DIR / "results" / "cells" / f"{c['cells'][0]}.json").read_text())["model"]["train_config"]
     same = json.dumps(flown, sort_keys=True) == json.dumps(rec["train_config"], sort_keys=True)
     minutes = training_minutes(rec) if same else float("nan")  # the record is of another training than the cell's
-    rows.append(f"| {F}{'' if c.get('book_recipe', True) else ' †'} | **{c['relative_cost_mean']:.2f}** ({c['ci95'][0]:.2f}-{c['ci95'][1]:.2f}) | {c['paper']:.2f} | "
+    rows.append(f"| {F} | **{c['relative_cost_mean']:.2f}** ({c['ci95'][0]:.2f}-{c['ci95'][1]:.2f}) | {c['paper']:.2f} | "
                 f"{var['2s']:.1e} / {var['5s']:.1e} | {conn:.0%} | {'yes' if flock else 'no'} | "
                 f"{c['median_min_distance']:.3f} | {c['share_below_0.05m']:.0%} | {'—' if minutes != minutes else f'{minutes:.0f}'} |")
 display(Markdown(f"| F | VGAI relative cost (95% CI), {c['episodes']} episodes of seed {tables_seed} | paper | velocity variance 2 s / 5 s [m²/s²] | "
                  "connected at 5 s | flocked | median closest approach [m] | episodes < 0.05 m | training [min] |\n"
-                 "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
-                 + ("\n\n† trained before the book's recipe (without the learner flying alone: section 6, row 4), "
-                    "to be retrained with it" if not all(c.get("book_recipe", True) for c in cells.values()) else "")))
+                 "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)))
 
 # %% [markdown]
 # The paper finds that VGAI improves with $F$ and that even $F = 6$, as many numbers as the DAGNN's
@@ -251,11 +248,8 @@ display(prose("The F = 24 row is section 3's VGAI, flown on Table 1a's {n} test 
               n=cells[24]["episodes"], c=cells[24]["relative_cost_mean"], lo=cells[24]["ci95"][0], hi=cells[24]["ci95"][1],
               h=head["relative_cost_mean"], hlo=head["relative_cost_mean_ci95"][0], hhi=head["relative_cost_mean_ci95"][1],
               hn=head["episodes"], seed=tables_seed))
-prose("{claim}{caveat}", claim=findings.sentence("VGAI's cost falls as F grows (F = 6 → 12 → 24)",
-                                                  findings.trend(recs_F, direction=-1), recs_F, list(cells)),
-      caveat=("" if len({c.get("book_recipe", True) for c in cells.values()}) == 1 else
-              " Careful: these F were not all trained with the same recipe (†), so this is not yet the comparison "
-              "the paper makes."))
+prose("{claim}", claim=findings.sentence("VGAI's cost falls as F grows (F = 6 → 12 → 24)",
+                                         findings.trend(recs_F, direction=-1), recs_F, list(cells)))
 
 # %% [markdown]
 # The training column is the wall time each training recorded on this 2-core machine, stages 1 to
@@ -264,20 +258,20 @@ prose("{claim}{caveat}", claim=findings.sentence("VGAI's cost falls as F grows (
 # %% [markdown]
 # ## 5. A flight
 #
-# The same initial conditions under the expert, the DAGNN, the book's VGAI, the paper's recipe for
-# VGAI (the plain CNN, trained with the same seed and budget: the first row of section 6's table)
-# and the local heuristic, flown for 5 s:
+# The same initial conditions under the expert, the DAGNN, the book's VGAI, the paper's VGAI (one
+# gray frame, trained as the paper describes it with the same seed: section 6) and the local
+# heuristic, flown for 5 s:
 
 # %%
 from vgai_lite.viz import animate_swarms, animation_image, plot_velocity_variance
 
 dagnn = load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt")
-paper_recipe = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt")
+paper_vgai = load_controller(DATA_DIR / "experiments" / "vgai_paper_seed0.pt")
 r0, v0 = sample_initial_state(cfg, pick(10, 2), torch.Generator().manual_seed(TEST_SEED))
 steps = pick(500, 60)  # 5 s: longer than the training episodes, to see what is left late in a flight
 trajs = {name: rollout(c, cfg, r0, v0, steps=steps) for name, c in
          (("Centralized", ExpertController(cfg)), ("DAGNN", dagnn), ("VGAI", vgai),
-          ("VGAI, the paper's recipe", paper_recipe), ("Local", LocalController(cfg)))}
+          ("the paper's VGAI", paper_vgai), ("Local", LocalController(cfg)))}
 fig, ax = plt.subplots(figsize=(8, 4.5))
 plot_velocity_variance(ax, trajs, cfg.Ts)
 ax.set_ylim(bottom=1e-5), ax.axvline(cfg.T * cfg.Ts, color="0.5", ls=":", lw=1)
@@ -603,7 +597,8 @@ prose("{k} of {n} training seeds flock; their relative costs run from {lo:.2f} t
 # %%
 LEAVE_ONE_OUT = [("without the learner flying alone (DAgger's mixture only)", "vgai_F24_validation"),
                  ("without the depth channel (gray and its motion channel)", "vgai_learner_gray"),
-                 ("without the warm starts (joint BPTT from random weights)", "vgai_book_no_warm")]
+                 ("without the warm starts (joint BPTT from random weights)", "vgai_book_no_warm"),
+                 ("without the second frame (no motion channel, so no odd motion features)", "vgai_book_one_frame")]
 loo = {label: json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text()) for label, name in LEAVE_ONE_OUT}
 assert all((r["seed"], r["episodes"]) == (some["seed"], some["episodes"]) for r in loo.values())
 recipe = {"relative_cost_mean": sum(lc) / len(lc), "per_seed": lc, "seed_std": float(np.std(lc, ddof=1))}

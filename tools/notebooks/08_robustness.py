@@ -183,10 +183,7 @@ display(prose("The clean VGAI cell is the book's VGAI on {n} episodes of seed {s
               lo=sweep_clean["relative_cost_mean_ci95"][0], hi=sweep_clean["relative_cost_mean_ci95"][1],
               h=head["relative_cost_mean"], hlo=head["relative_cost_mean_ci95"][0], hhi=head["relative_cost_mean_ci95"][1],
               hn=head["episodes"], hs=head["seed"]))
-if flown != robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"]):
-    display(Markdown("**Careful: this sweep flew the book's earlier VGAI** (the recipe without the learner flying "
-                     "alone, notebook 06's ablation, row 4), not the shipped `vgai_F24.pt`; its VGAI cells are "
-                     "recomputed by the command above."))
+assert flown == robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"]), "the sweep flew the shipped vgai_F24.pt"
 
 # %%
 local = robustness.find(results, "Local")
@@ -315,7 +312,7 @@ fig, ax = plt.subplots(figsize=(6, 3.6))
 sizes, recs = robustness.curve(results, "VGAI", "image_noise")
 ax.plot(sizes, [x["relative_cost_mean"] for x in recs], "o-", color=PALETTE["VGAI"], label="VGAI (shipped)")
 ax.plot(sig, [aug["image_noise"][s]["relative_cost_mean"] for s in aug["image_noise"]], "s--",
-        color=PALETTE["VGAI"], label="VGAI trained two more rounds on noisy frames")
+        color=PALETTE["noisy frames"], label="VGAI trained two more rounds on noisy frames")
 ax.axhline(local["relative_cost_mean"], color=PALETTE["Local"], ls="--", label="Local (unperturbed)")
 ax.set_xlabel("pixel noise sigma"), ax.set_ylabel("relative cost"), ax.legend()
 plt.tight_layout()
@@ -388,10 +385,11 @@ blur_keys = sorted((k for k in next(iter(cam_eval.values())) if k.startswith("bl
 fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
 for label, ev in cam_eval.items():
     style = "o-" if "shipped" in label else ("s--" if "wide" in label else "^-")
+    color = PALETTE["VGAI" if "shipped" in label else "depth camera" if "depth" in label else "gray camera"]
     xs = [0.0] + [float(k[5:]) for k in noise_keys]
-    axes[0].plot(xs, [ev[k]["relative_cost_mean"] for k in ["clean"] + noise_keys], style, label=label)
+    axes[0].plot(xs, [ev[k]["relative_cost_mean"] for k in ["clean"] + noise_keys], style, color=color, label=label)
     xb = [0.0] + [float(k[4:]) for k in blur_keys]
-    axes[1].plot(xb, [ev[k]["relative_cost_mean"] for k in ["clean"] + blur_keys], style, label=label)
+    axes[1].plot(xb, [ev[k]["relative_cost_mean"] for k in ["clean"] + blur_keys], style, color=color, label=label)
 sizes, recs = robustness.curve(results, "DAGNN", "position_noise")
 axes[2].plot(sizes, [r["relative_cost_mean"] for r in recs], "o-", color=controller_color("DAGNN"), label="DAGNN")
 for ax, xl in zip(axes, ("sensor noise σ (pixel values in [0, 1])", "lens blur (degrees of view)",

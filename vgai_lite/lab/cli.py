@@ -10,6 +10,7 @@
   reproduce    the paper's tables (F, K, v_init, R, N'): train what is missing, evaluate, data/results/;
                --only robustness: the perturbation sweep of notebook 08, data/robustness/
   site       the book as a static website (Sphinx + MyST-NB, from the executed notebooks), site/
+  pdf        the whole book as one offline PDF (the website printed by headless Chromium), book.pdf
   student-copies  write the notebooks with every exercise's solution replaced by a stub
   grade        execute a student's notebook in quick mode and score its exercises (JSON)
   nbgrader-course  lay the graded notebooks out as an nbgrader course (needs requirements-grading.txt)
@@ -282,6 +283,14 @@ def cmd_site(args, extra):
           f"open {info['out']}/index.html (or serve it: python -m http.server -d {args.out})")
 
 
+def cmd_pdf(args, extra):
+    from . import pdf
+
+    info = pdf.build(args.out, site=args.site)
+    print(f"printed {len(info['chapters'])} pages of the book ({info['pages']} PDF pages, "
+          f"{info['animations']} animations as their first frame) in {info['seconds']:.0f} s: {info['out']}")
+
+
 def cmd_benchmark(args, extra):
     import torch
 
@@ -290,6 +299,16 @@ def cmd_benchmark(args, extra):
     if args.threads:
         torch.set_num_threads(args.threads)
     benchmark.main(args)
+
+
+def _add_book_parsers(sub):
+    """The book's other forms: the website and the PDF."""
+    p = sub.add_parser("site", help="the book as a static website from the executed notebooks (needs requirements-site.txt)")
+    p.add_argument("--out", default="site", help="folder for the site (default ./site)")
+    p.add_argument("--verbose", action="store_true", help="show Sphinx's output")
+    p = sub.add_parser("pdf", help="the whole book as one offline PDF (needs requirements-site.txt and Chromium)")
+    p.add_argument("--out", default="book.pdf", help="the PDF file (default ./book.pdf)")
+    p.add_argument("--site", default=None, help="print this site, built before by `site`, instead of building one")
 
 
 def main(argv=None):
@@ -357,9 +376,7 @@ def main(argv=None):
                         "needs requirements-cluster.txt")
     p.add_argument("--ray-cpus", dest="ray_cpus", type=int, default=None,
                    help="CPUs of the local Ray instance (default: all of this machine's)")
-    p = sub.add_parser("site", help="the book as a static website from the executed notebooks (needs requirements-site.txt)")
-    p.add_argument("--out", default="site", help="folder for the site (default ./site)")
-    p.add_argument("--verbose", action="store_true", help="show Sphinx's output")
+    _add_book_parsers(sub)
     p = sub.add_parser("student-copies", help="notebooks with solutions replaced by stubs, outputs cleared")
     p.add_argument("--out", default="student", help="folder for the copies (default ./student)")
     p.add_argument("--source", default=None, help="folder of the solution notebooks (default the book's)")
@@ -379,5 +396,5 @@ def main(argv=None):
     return {"lab": cmd_lab, "evaluate": cmd_evaluate, "demo": cmd_demo, "export": cmd_export,
      "benchmark": cmd_benchmark, "train-dagnn": cmd_train_dagnn,
      "train-vgai": cmd_train_vgai, "student-copies": cmd_student_copies,
-     "reproduce": cmd_reproduce, "site": cmd_site,
+     "reproduce": cmd_reproduce, "site": cmd_site, "pdf": cmd_pdf,
      "grade": cmd_grade, "nbgrader-course": cmd_nbgrader_course}[args.command](args, extra)

@@ -5,7 +5,7 @@ Introduced in notebook 05. Like ``exercises``, each check runs the student's cod
 inputs against a property that defines the tool, never raises, and prints what went wrong.
 
   05.2  a convolution along the panorama's columns that wraps around (the panorama is a circle)
-  06.3  the odd part of a CNN in its motion channels (what made VGAI flock, notebook 06)
+  06.3  the odd part of a CNN in its motion channels (notebook 06)
   07.1  the velocity variance at any horizon of a flight (what eq. 1 hides late in a flight)
 """
 

@@ -50,7 +50,7 @@ def _rows() -> dict:
             "residual blocks and two fully connected layers, average pooling along the vertical axis only",
             f"the same shape: stem, 4 residual blocks ({tv.cnn_widths[0]} and {tv.cnn_widths[1]} channels), "
             f"fc {tv.cnn_hidden} → F; F/3 of the features odd in the motion channels (`motion_features`)",
-            "the odd features read exactly 0 when nothing moves: what made VGAI flock; notebook 06, section 6"),
+            "the odd features read exactly 0 when nothing moves; notebook 06, section 6 measures each departure"),
         "training": (
             "CNN and MLP end to end by K-step BPTT, imitation (L1), Adam 1e-3, DAgger with p = 0.33",
             f"the same, after two warm starts: (1) visual state estimation, the CNN regresses the DAGNN's "

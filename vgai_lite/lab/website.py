@@ -60,6 +60,7 @@ myst_heading_anchors = 3
 nb_execution_mode = "off"          # the committed outputs, never re-executed
 nb_ipywidgets_js = {}              # no widget JavaScript from a CDN: no committed output needs it
 nb_merge_streams = True
+nb_render_markdown_format = "myst"  # Markdown outputs (the tables and prose cells display) parsed as MyST: tables, maths
 html_theme = "sphinx_book_theme"
 html_title = "vgai-lite: learning VGAI, notebook by notebook"
 html_theme_options = {"use_download_button": False, "show_toc_level": 2,
