@@ -10,6 +10,7 @@ numbers) fails here.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -20,8 +21,16 @@ from vgai_lite.book import DATA_DIR, ROOT
 from vgai_lite.flocking import flocking_cost
 from vgai_lite.lab.provenance import Provenance, sha256
 
-RULES = {"Local": LocalController, "local": LocalController}
-"""Records of controllers that are rules (no checkpoint), by the name a record gives them."""
+def _pilot(cfg):
+    sys.path.insert(0, str(ROOT / "tools"))
+    from test_episodes import pilot
+
+    return pilot(cfg)
+
+
+RULES = {"Local": LocalController, "local": LocalController, "modular vision pilot": _pilot}
+"""Records of controllers that are built rather than loaded from one checkpoint (a rule, or the
+modular vision pilot composed of two networks), by the name a record gives them."""
 
 PROVENANCE_FIELDS = {"command", "git_commit", "library_modified_since_commit", "python", "torch", "torch_threads",
                      "load_average_mean", "load_average_max", "wall_seconds"}
@@ -56,13 +65,13 @@ def test_a_records_provenance_is_complete_and_names_its_checkpoint(path, rec):
     prov = _evaluation(rec)
     assert PROVENANCE_FIELDS <= set(prov), f"missing {PROVENANCE_FIELDS - set(prov)}"
     assert {"episodes_seed", "episodes"} <= set(prov)
-    if rec.get("controller") in RULES:  # a rule, not a trained network: no checkpoint
-        return
     if "checkpoints" in prov:  # a record that read several networks names each, with its hash
         assert prov["checkpoints"], f"{path.name} names an empty list of checkpoints"
         for name, digest in prov["checkpoints"].items():
             assert (ROOT / name).is_file(), f"{path.name} read {name}, which is not in the repository"
             assert sha256(ROOT / name) == digest, f"{name} changed since {path.name} was written"
+        return
+    if rec.get("controller") in RULES:  # a rule, not a trained network: no checkpoint
         return
     assert {"checkpoint", "checkpoint_sha256"} <= set(prov)
     ckpt = ROOT / prov["checkpoint"]

@@ -38,6 +38,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from vgai_lite import FlockConfig, load_controller, rollout, sample_initial_state  # noqa: E402
 from vgai_lite.book import DATA_DIR, WORKING_SEED  # noqa: E402
+from vgai_lite.lab.provenance import Provenance, repo_relative, sha256  # noqa: E402
+
+VGAIS = {"VGAI without the learner flying alone (DAgger's mixture only), training seed 0": "experiments/vgai_F24_mixture.pt",
+         "VGAI, ablation row 1 (the paper's CNN, loss and mixture; the book's sensor and warm starts)":
+             "experiments/vgai_F24_plain.pt",
+         "the paper's VGAI (one gray frame), training seed 0": "experiments/vgai_paper_seed0.pt"}
+"""The VGAIs flown beside the book's recipe (its three training seeds, data/vgai/seeds/), by label."""
 from vgai_lite.flocking import velocity_variance  # noqa: E402
 
 TIMES = (2.0, 5.0)
@@ -90,21 +97,28 @@ def main(argv=None) -> int:
     from estimator_in_the_loop import VisionDAGNN, odd_estimator  # the modular vision pilot
 
     dagnn = load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt")
+    read = [DATA_DIR / "dagnn" / "dagnn_K4.pt", DATA_DIR / "experiments" / "estimator_odd8_synth0.5.pt"]
     pilots = {"DAGNN (K - 1 = 3)": dagnn,
               "modular vision pilot (odd estimator -> DAGNN's MLP)": VisionDAGNN(dagnn, *odd_estimator(cfg))}
     for path in sorted((DATA_DIR / "vgai" / "seeds").glob("vgai_F24_seed*.pt")):
-        pilots[f"VGAI {path.stem}"] = load_controller(path)
-    pilots["VGAI, the paper's recipe (plain CNN)"] = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt")
-    out = {"command": " ".join(["python tools/experiments/consensus_limit.py"] + (argv or sys.argv[1:])),
-           "episodes": args.episodes, "seed": WORKING_SEED, "controllers": {}}
-    for label, c in pilots.items():
-        res = damping_and_forcing(c, cfg, args.episodes)
-        out["controllers"][label] = res
-        print(label, flush=True)
-        for t, x in res.items():
-            print(f"  {t}: variance {x['velocity_variance_median']:.2e}, damping gain {x['damping_gain_median']:.2f} /s, "
-                  f"forcing at rest {x['forcing_at_rest_rms_median']:.3f} m/s², (f/gamma)² {x['balance_variance_median']:.2e}",
-                  flush=True)
+        pilots[f"VGAI, the book's recipe, training seed {path.stem.rsplit('seed', 1)[1]}"] = load_controller(path)
+        read.append(path)
+    for label, rel in VGAIS.items():
+        pilots[label] = load_controller(DATA_DIR / rel)
+        read.append(DATA_DIR / rel)
+    command = " ".join(["python tools/experiments/consensus_limit.py"] + (argv or sys.argv[1:]))
+    out = {"command": command, "episodes": args.episodes, "seed": WORKING_SEED, "controllers": {}}
+    with Provenance(command) as prov:
+        for label, c in pilots.items():
+            res = damping_and_forcing(c, cfg, args.episodes)
+            out["controllers"][label] = res
+            print(label, flush=True)
+            for t, x in res.items():
+                print(f"  {t}: variance {x['velocity_variance_median']:.2e}, damping gain {x['damping_gain_median']:.2f} /s, "
+                      f"forcing at rest {x['forcing_at_rest_rms_median']:.3f} m/s², (f/gamma)² {x['balance_variance_median']:.2e}",
+                      flush=True)
+    out["provenance"] = prov.record(seed=WORKING_SEED, episodes=args.episodes,
+                                    checkpoints={repo_relative(p): sha256(p) for p in read})
     if args.out:
         Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
     return 0
