@@ -195,6 +195,23 @@ def test_findings_use_one_criterion():
     assert "cannot be told" in findings.sentence("x", findings.CANNOT_TELL, [a, b], [6, 24])
 
 
+def test_the_sentence_on_what_the_flock_needs_names_each_departure_by_its_record():
+    from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE
+    from vgai_lite.lab import findings
+
+    flocks = {"velocity_variance_median": {"5s": FLOCKED_VARIANCE / 2}, "share_connected_at_end": 1.0,
+              "flocking_horizon_s": 5.0}
+    apart = {**flocks, "velocity_variance_median": {"5s": 10 * FLOCKED_VARIANCE}}
+    cut = {**flocks, "share_connected_at_end": FLOCKED_CONNECTED / 2}
+    all_needed = findings.needs({"depth": apart, "warm starts": cut})
+    assert "only with every departure" in all_needed and "depth" in all_needed and "warm starts" in all_needed
+    some = findings.needs({"depth": flocks, "warm starts": apart})
+    assert some == "VGAI still flocks without depth; it does not flock without warm starts."
+    assert "still flocks without any one" in findings.needs({"depth": flocks})
+    with pytest.raises(ValueError):
+        findings.needs({})
+
+
 def test_flocked_reads_the_variance_at_5_s_and_the_connectivity():
     from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked
 

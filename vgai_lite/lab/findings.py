@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
+from ..evaluate import flocked
+
 HOLDS, CONTRADICTED, CANNOT_TELL = "yes", "no", "cannot tell"
 
 
@@ -66,6 +68,22 @@ def series_text(cells: Sequence[dict], labels: Sequence) -> str:
     """'6: 2.43 (2.30-2.57) → 12: ...', each cost with its interval."""
     return " → ".join(f"{lab}: {c['relative_cost_mean']:.2f} ({interval(c)[0]:.2f}-{interval(c)[1]:.2f})"
                       for lab, c in zip(labels, cells))
+
+
+def needs(without: dict) -> str:
+    """The book's one sentence on what makes VGAI flock, from the leave-one-out records
+    (``runs.LEAVE_ONE_OUT``: departure -> the record of the recipe without it): which departures the
+    flock needs (without each, it does not flock by ``evaluate.flocked``) and which it does not."""
+    if not without:
+        raise ValueError("needs() takes at least one leave-one-out record")
+    needed = [d for d, rec in without.items() if not flocked(rec)]
+    spare = [d for d, rec in without.items() if flocked(rec)]
+    if not spare:
+        return (f"VGAI flocks only with every departure from the paper that the book left out in turn: without "
+                f"any one of them ({', '.join(needed)}) it does not flock.")
+    if not needed:
+        return f"VGAI still flocks without any one of the departures the book left out in turn ({', '.join(spare)})."
+    return f"VGAI still flocks without {', '.join(spare)}; it does not flock without {', '.join(needed)}."
 
 
 def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) -> str:

@@ -71,6 +71,19 @@ its warm starts (``BOOK_SENSOR``; "the paper's recipe" of notebook 06's first ab
 paper's VGAI itself was flown): their records (and vgai_F24_plain's checkpoint) are kept in
 data/experiments/, for notebook 06's table and notebook 07's two trainings of one configuration."""
 
+LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {
+    "the learner flying alone": ("vgai_F24_validation", "DAgger's mixture only"),
+    "the depth channel": ("vgai_learner_gray", "gray and its motion channel"),
+    "the warm starts": ("vgai_book_no_warm", "joint BPTT from random weights"),
+    "the second frame": ("vgai_book_one_frame", "no motion channel, so no odd motion features"),
+    "the odd motion features": ("vgai_book_no_odd", "a plain CNN"),
+    "the synthetic relative velocities": ("vgai_book_no_synthetic", "stage 1 on the expert's states alone"),
+    "the state-estimation loss in stage 3": ("vgai_book_no_aux", "eq. 10 alone in the joint training"),
+}
+"""The book's recipe without one of its departures from the paper at a time (training seed 0,
+validation episodes): departure -> (data/experiments/NAME.json, what is left). Notebook 06's
+leave-one-out table and the book's one sentence on what VGAI's flocking needs (``findings.needs``)."""
+
 PAPER_SEEDS = (0, 1, 2)
 """Training seeds of the paper's VGAI (``PAPER``) in the book's simulator: data/experiments/vgai_paper_seedS."""
 
