@@ -65,7 +65,7 @@ plt.show()
 # | **prehistory** | the frames before $t = 0$, drawn from the initial velocities flown backwards, so the first motion image is not empty | 04, `VisionConfig.prehistory` |
 # | **odd motion features** | CNN features that change sign when the motion channel does, so they read zero when nothing moves | 05, 06, `VisualCNN.motion_features` |
 # | **stage 1 / 2 / 3** | the book's VGAI training: the CNN warm-started as a state estimator, the MLP fitted on its features, then both trained together by K-step BPTT | 06, `vgai_training.train_vgai` |
-# | **modular vision pilot** | the CNN trained as a state estimator feeding the DAGNN's MLP, not trained end to end: the control experiment for VGAI | 05 |
+# | **modular vision pilot** | the CNN trained as a state estimator feeding the DAGNN's MLP, not trained end to end: the control experiment for VGAI | 06, 09 |
 #
 # ## The paper and this book
 #

@@ -18,8 +18,7 @@
 # the DAGNN's aggregation; explain K-step backpropagation through time and DAgger; compare VGAI with
 # the DAGNN, the local heuristic and the expert on the same episodes, by cost and by whether the
 # drones end up flying as one; explain why a vision controller can match a cost and still not
-# flock, and what each of the book's four changes to the paper's recipe buys (a symmetry built
-# into the CNN, and a learner allowed to drift among them).
+# flock, and what each of the book's departures from the paper buys (section 6 leaves each out in turn).
 #
 # **You implement** DAgger's mixing rule (exercise 06.1) and the K-step BPTT loss (exercise 06.2), and
 # run an open-ended experiment (exercise 06.3); an automatic check tells you at once whether your code is right,
@@ -73,8 +72,8 @@ plt.show()
 # ## 2. Training in three stages
 #
 # The paper gives the loss, the optimiser, the learning rate and DAgger's probability, and nothing
-# about warm starts or budgets. Training the whole chain from scratch on a 2-core CPU is slow to get
-# going, so we train in three stages, all with L1 and Adam at 1e-3:
+# about warm starts or budgets. Trained from random weights, the chain barely gets going (section 6
+# measures it), so the book trains in three stages, all with L1 and Adam at 1e-3:
 #
 # 1. **visual state estimation** (notebook 05): the CNN regresses the six exact local features,
 #    half of its states shown with synthetic relative velocities (`synthetic_share`);
@@ -91,8 +90,9 @@ plt.show()
 # the paper's VGAI as the paper describes it (`PAPER`: one gray frame per step, no depth, no warm
 # start, eq. 10 alone, DAgger's mixture). The book's recipe is the preset `BOOK`: the paper's with
 # the book's sensor (gray and depth, with the motion channel) and warm starts (stages 1 and 2,
-# `BOOK_SENSOR`), then these four changes (`BOOK_RECIPE` holds them all; `book_recipe(F=6)` is the
-# book's recipe at F = 6):
+# `BOOK_SENSOR`), then these four changes (`BOOK_RECIPE` holds them all, its `motion_features=None`
+# meaning $F/3$ odd features whenever there is a motion channel; `book_recipe(F=6)` is the book's
+# recipe at F = 6):
 
 # %%
 print(BOOK_RECIPE)
@@ -144,7 +144,7 @@ plt.show()
 # %% [markdown]
 # The warm-started CNN and MLP alone fly badly (their errors compound in closed loop); the rounds of
 # joint K-step BPTT with the learner in the loop bring the cost down, unevenly, so where training
-# stops matters and trainings that differ only in the seed land apart (section 6 trains three).
+# stops matters (section 6 trains three seeds and compares them).
 # Each joint step runs 4 windows × 4 steps × 50 agents = 800 images forward and backward, through
 # the trunk twice for the odd motion features (`python -m vgai_lite benchmark --vgai` times it).
 #
@@ -248,12 +248,14 @@ display(prose("The F = 24 row is section 3's VGAI, flown on Table 1a's {n} test 
               n=cells[24]["episodes"], c=cells[24]["relative_cost_mean"], lo=cells[24]["ci95"][0], hi=cells[24]["ci95"][1],
               h=head["relative_cost_mean"], hlo=head["relative_cost_mean_ci95"][0], hhi=head["relative_cost_mean_ci95"][1],
               hn=head["episodes"], seed=tables_seed))
-prose("{claim}", claim=findings.sentence("VGAI's cost falls as F grows (F = 6 → 12 → 24)",
-                                         findings.trend(recs_F, direction=-1), recs_F, list(cells)))
+prose("{claim} And F = 6 {f6} by the book's definition (velocity variance at 5 s {v6:.1e} m²/s², connected in {c6:.0%}).",
+      claim=findings.sentence("VGAI's cost falls as F grows (F = 6 → 12 → 24)",
+                              findings.trend(recs_F, direction=-1), recs_F, list(cells)),
+      f6="flocks" if flocked(cells[6]) else "does not flock", v6=cells[6]["velocity_variance_median"]["5s"],
+      c6=cells[6]["share_connected_at_end"])
 
 # %% [markdown]
-# The training column is the wall time each training recorded on this 2-core machine, stages 1 to
-# 3 (each record's provenance says how busy the machine was while it trained).
+# The training column is the wall time each training recorded, stages 1 to 3, on two CPU cores.
 
 # %% [markdown]
 # ## 5. A flight
@@ -285,9 +287,9 @@ animation_image(anim)
 # %% [markdown]
 # ## 6. What each ingredient buys
 #
-# The paper's recipe (a plain CNN, trained end to end on the action loss of eq. 10 with DAgger's
-# per-step mixture) gives a VGAI whose cost is near the paper's and whose drones never agree on a
-# velocity. The book's recipe adds four things. The table adds them one at a time, each row one
+# The first row below has the paper's CNN, the action loss of eq. 10 and DAgger's per-step mixture,
+# but sees through the book's sensor and starts from the book's warm starts (the paper's VGAI itself
+# follows the table). The book's recipe adds four things to it. The table adds them one at a time, each row one
 # change from the row above, all trained from the same seed with the same budget and evaluated the
 # same way, on the **validation** episodes (these are choices, so they are never made on the test
 # episodes; `tools/experiments/vgai_variant.py`, records with their provenance in `data/experiments/`
@@ -364,11 +366,14 @@ costs = [r["relative_cost_mean"] for r in paper_vgai.values()]
 # the reference a controller that has learned nothing should be read against: zero acceleration for every drone
 still = relative_cost(lambda r, v: torch.zeros_like(v), cfg, some["episodes"], seed=some["seed"], name="do nothing")
 first = [r["round_checks"][0]["check_relative_cost"] for r in paper_vgai.values()]
+still_rec = still.summary()
+says_still = {-1: "costs less than doing nothing", 0: "cannot be told from doing nothing",
+              1: "costs more than doing nothing"}
 prose("The paper's VGAI in the book's world costs {lo:.2f} to {hi:.2f} across three training seeds (the paper reports "
       "{paper:.2f} for its own) and {flock}; its drones are {safe} the expert. Doing nothing at all (every drone keeps "
       "its initial velocity) costs {still:.2f} on the same episodes, with a variance of {still_var:.1e} m²/s² at 5 s: "
-      "after its joint training on the expert's flights the paper's VGAI is {verdict} (round checks {first}), and "
-      "DAgger's rounds do not lift it. From random weights, at the book's budget ({minutes} min per training), "
+      "after its joint training on the expert's flights the paper's VGAI costs {first} (one check per seed), "
+      "and DAgger's rounds do not lift it: {verdict}. From random weights, at the book's budget ({minutes} min per training), "
       "end-to-end imitation alone does not find features to act on. The first row of the ablation departs from it "
       "twice: the book's sensor, and the warm starts that first teach the CNN the six local features before the "
       "joint training; the square below flies each without the other.",
@@ -377,8 +382,7 @@ prose("The paper's VGAI in the book's world costs {lo:.2f} to {hi:.2f} across th
              "flocks in {} of {} seeds".format(sum(flocked(r) for r in paper_vgai.values()), len(paper_vgai))),
       safe=("as safe as" if all(as_safe_as_expert(r) for r in paper_vgai.values()) else "not always as safe as"),
       still=still.mean_ratio, still_var=float(still.summary()["velocity_variance_median"]["5s"]),
-      verdict=("no better than doing nothing" if min(first) >= 0.9 * still.mean_ratio else
-               "better than doing nothing"),
+      verdict="; ".join(f"seed {s} {says_still[findings.compare(r, still_rec)]}" for s, r in paper_vgai.items()),
       first=", ".join(f"{c:.1f}" for c in first),
       minutes=", ".join(f"{training_minutes(r):.0f}" for r in paper_vgai.values()))
 
@@ -503,8 +507,8 @@ prose("Along expert flights at step {step}, where the swarm is aligned and the t
 
 # %% [markdown]
 # **Why the learner must fly alone.** With the first three ingredients VGAI holds its swarm
-# together but still brakes a relative velocity it sees several times more weakly than the DAGNN
-# flown on the same estimator (the *damping gain* below). The reason is in the data DAgger
+# together but brakes a relative velocity it sees more weakly than the DAGNN flown on the same
+# estimator (the *damping gain* below). The reason is in the data DAgger
 # collects. Under the paper's mixture the expert flies two steps in three, and the mixture brakes
 # almost as hard as the expert: every stored swarm aligns within a fraction of a second. The
 # stored flights then hold almost no state in which drones drift past each other at the speeds the
@@ -519,15 +523,14 @@ prose("Along expert flights at step {step}, where the swarm is aligned and the t
 # (`tools/experiments/consensus_limit.py`), the *damping gain* $\gamma$ says how hard it brakes a
 # disagreement it sees (the same formation flown with and without the disagreement), the *forcing at
 # rest* $f$ how hard it pushes drones apart when they already agree; the spread settles near
-# $(f/\gamma)^2$. Measured on three trainings of the recipe without the learner flying alone (row 4
-# above; the first is `data/experiments/vgai_F24_mixture.pt`):
+# $(f/\gamma)^2$. Measured on the book's recipe (its three training seeds), the recipe without the
+# learner flying alone (row 4 above), the ablation's first row and the paper's VGAI:
 
 # %%
 limit = json.loads((DATA_DIR / "experiments" / "consensus_limit.json").read_text())
 rows = []
 for name, r in limit["controllers"].items():
-    label = name.replace("VGAI vgai_F24_seed", "VGAI without the learner alone, training seed ")
-    rows.append(f"| {label} | " + " | ".join(
+    rows.append(f"| {name} | " + " | ".join(
         f"{r[t]['velocity_variance_median']:.1e} | {r[t]['damping_gain_median']:.1f} | "
         f"{r[t]['forcing_at_rest_rms_median']:.3f} | {r[t]['balance_variance_median']:.1e}" for t in ("2s", "5s")) + " |")
 display(Markdown(f"Median over {limit['episodes']} flights (seed {limit['seed']}) of each controller, at 2 s and at 5 s:\n\n"
@@ -537,12 +540,15 @@ display(Markdown(f"Median over {limit['episodes']} flights (seed {limit['seed']}
 # %%
 C = limit["controllers"]
 pilot = next(v for k, v in C.items() if k.startswith("modular"))["5s"]
-seeds = {k.split("seed")[-1]: v["5s"] for k, v in C.items() if k.startswith("VGAI vgai_F24_seed")}
-weaker = {s: pilot["damping_gain_median"] / x["damping_gain_median"] for s, x in seeds.items()}
-prose("At 5 s, each of the {n} trainings brakes {lo:.1f} to {hi:.1f} times more weakly than the modular vision pilot "
-      "(the same kind of CNN feeding the DAGNN's MLP): {common}.", n=len(seeds), lo=min(weaker.values()),
-      hi=max(weaker.values()),
-      common=("the limit they share is the damping gain" if min(weaker.values()) > 1.5 else "they do not share one limit"))
+mixture = next(v for k, v in C.items() if k.startswith("VGAI without the learner"))["5s"]
+seeds = [v["5s"] for k, v in C.items() if "the book's recipe" in k]
+weaker = [pilot["damping_gain_median"] / x["damping_gain_median"] for x in seeds]
+prose("At 5 s, the recipe without the learner flying alone brakes {m:.1f} times more weakly than the modular vision "
+      "pilot (the same kind of CNN feeding the DAGNN's MLP), with a forcing at rest of {mf:.3f} m/s²; the book's recipe "
+      "brakes {lo:.1f} to {hi:.1f} times more weakly than the pilot over its {n} training seeds, with a forcing of "
+      "{flo:.3f} to {fhi:.3f} m/s².", m=pilot["damping_gain_median"] / mixture["damping_gain_median"],
+      mf=mixture["forcing_at_rest_rms_median"], lo=min(weaker), hi=max(weaker), n=len(seeds),
+      flo=min(x["forcing_at_rest_rms_median"] for x in seeds), fhi=max(x["forcing_at_rest_rms_median"] for x in seeds))
 
 # %% [markdown]
 # **Four other changes**, each one change from row 4 of the table (same seed, same first
@@ -583,7 +589,7 @@ n_flocked = sum(flocked(r) for r in seed_recs.values())
 prose("{k} of {n} training seeds flock; their relative costs run from {lo:.2f} to {hi:.2f} (mean {mean:.2f}) and their "
       "variances at 5 s from {vlo:.1e} to {vhi:.1e} m²/s². {verdict}", k=n_flocked, n=len(seed_recs), lo=min(lc),
       hi=max(lc), mean=sum(lc) / len(lc), vlo=min(lv), vhi=max(lv),
-      verdict=("The learner flying alone is a recipe, not a lucky seed." if n_flocked == len(seed_recs) else
+      verdict=("The recipe is not a lucky seed." if n_flocked == len(seed_recs) else
                "The recipe works for most seeds, not every one." if 2 * n_flocked > len(seed_recs) else
                "Most seeds do not flock: the recipe is not settled."))
 
@@ -595,11 +601,10 @@ prose("{k} of {n} training seeds flock; their relative costs run from {lo:.2f} t
 # its record (`data/experiments/`).
 
 # %%
-LEAVE_ONE_OUT = [("without the learner flying alone (DAgger's mixture only)", "vgai_F24_validation"),
-                 ("without the depth channel (gray and its motion channel)", "vgai_learner_gray"),
-                 ("without the warm starts (joint BPTT from random weights)", "vgai_book_no_warm"),
-                 ("without the second frame (no motion channel, so no odd motion features)", "vgai_book_one_frame")]
-loo = {label: json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text()) for label, name in LEAVE_ONE_OUT}
+from vgai_lite.lab.runs import LEAVE_ONE_OUT
+
+loo = {f"without {d} ({left})": json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text())
+       for d, (name, left) in LEAVE_ONE_OUT.items()}
 assert all((r["seed"], r["episodes"]) == (some["seed"], some["episodes"]) for r in loo.values())
 recipe = {"relative_cost_mean": sum(lc) / len(lc), "per_seed": lc, "seed_std": float(np.std(lc, ddof=1))}
 lo_r, hi_r = findings.interval(recipe)
@@ -612,9 +617,26 @@ display(prose("{lines}. {verdict}",
               lines="; ".join(f"*{label.split(' (')[0]}* {says[findings.compare(r, recipe)]} ({r['relative_cost_mean']:.2f}, "
                               f"variance at 5 s {r['velocity_variance_median']['5s']:.1e} m²/s², "
                               f"{'flocked' if flocked(r) else 'did not flock'})" for label, r in loo.items()),
-              verdict=("Without any one of them the recipe no longer flocks." if not any(flocked(r) for r in loo.values())
-                       else "Still flocking without it: " + ", ".join(l.split(" (")[0] for l, r in loo.items() if flocked(r))
-                       + ".")))
+              verdict=findings.needs({d: loo[f"without {d} ({left})"] for d, (_, left) in LEAVE_ONE_OUT.items()})))
+
+# %%
+fig, axes = plt.subplots(1, 2, figsize=(12, 0.45 * len(loo) + 1.4), sharey=True)
+ys = np.arange(len(loo))[::-1]
+for y, (label, r) in zip(ys, loo.items()):
+    lo, hi = r["relative_cost_mean_ci95"]
+    axes[0].errorbar(r["relative_cost_mean"], y, xerr=[[r["relative_cost_mean"] - lo], [hi - r["relative_cost_mean"]]],
+                     fmt="o", color=PALETTE["VGAI"], mfc=PALETTE["VGAI"] if flocked(r) else "white")
+    axes[1].plot(r["velocity_variance_median"]["5s"], y, "o", color=PALETTE["VGAI"],
+                 mfc=PALETTE["VGAI"] if flocked(r) else "white")
+axes[0].axvspan(lo_r, hi_r, color=PALETTE["VGAI"], alpha=0.2, label="the recipe over its 3 seeds (interval)")
+axes[1].axvspan(min(lv), max(lv), color=PALETTE["VGAI"], alpha=0.2, label="the recipe's 3 seeds")
+axes[1].axvline(FLOCKED_VARIANCE, color="0.3", ls="--", lw=0.8, label="the flocking threshold")
+axes[0].set_yticks(ys, [label.split(" (")[0] for label in loo])
+for ax, xl in zip(axes, ("relative cost (95% CI), log scale", "velocity variance at 5 s [m²/s²]")):
+    ax.set_xscale("log"), ax.set_xlabel(xl), ax.legend(fontsize=8, loc="lower right")
+fig.suptitle("The book's recipe without one departure at a time (filled: flocked; validation episodes)", fontsize=10)
+plt.tight_layout()
+plt.show()
 
 # %% [markdown]
 # **What the depth channel buys.** The paper's drones see camera images; ours see a gray channel
@@ -629,8 +651,7 @@ prose("{verdict}", verdict=(
     "**Gray alone flocks too**: the depth channel is not what makes VGAI flock (cost {g:.2f} against {d:.2f})."
     .format(g=gray["relative_cost_mean"], d=depth["relative_cost_mean"]) if flocked(gray) else
     "Gray alone does not flock (variance at 5 s {g5:.1e} against {d5:.1e} m²/s² with depth; cost {g:.2f} against "
-    "{d:.2f}): with this small CNN and this training, the depth channel buys the flocking, a help the paper's "
-    "cameras do not give.".format(g5=gray["velocity_variance_median"]["5s"], d5=depth["velocity_variance_median"]["5s"],
+    "{d:.2f}): without the depth channel this recipe does not flock, and the paper's cameras give no depth.".format(g5=gray["velocity_variance_median"]["5s"], d5=depth["velocity_variance_median"]["5s"],
                                   g=gray["relative_cost_mean"], d=depth["relative_cost_mean"])))
 
 # %% [markdown]
@@ -640,6 +661,7 @@ prose("{verdict}", verdict=(
 # mattered was its error where the truth is zero, which a closed loop integrates, and a cure in the
 # architecture (a symmetry) rather than a bigger network. And imitation learning learns only from
 # the states in its data: to learn to brake its own drift, the learner must be allowed to drift.
+# Neither is the whole story: the leave-one-out above measures what each departure buys.
 
 # %% [markdown]
 # ## 7. Exercise 06.1: DAgger's mixing rule
@@ -782,7 +804,7 @@ else:
 # %% [markdown]
 # ## Key takeaways
 #
-# * VGAI trains the CNN and the MLP together by K-step backpropagation through time; the book warm-starts both first, to train in minutes.
+# * VGAI trains the CNN and the MLP together by K-step backpropagation through time; the book warm-starts both first (section 6 flies its recipe without the warm starts, and the paper's VGAI, which has none).
 # * A low cost is not flocking. A plain CNN estimates velocity disagreements with a bias that depends on where the neighbours stand, a steady push; features odd in the motion channels read exactly zero when nothing moves.
 # * DAgger must show the learner its own mistakes: with the paper's per-step mixture the expert keeps every swarm aligned, so the learner never sees itself drift; swarms flown by the learner alone teach VGAI to brake (section 6).
 # * Judge a learned controller over a longer horizon than its training episodes, choose on validation episodes and report on test episodes.

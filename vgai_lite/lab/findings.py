@@ -76,14 +76,17 @@ def needs(without: dict) -> str:
     flock needs (without each, it does not flock by ``evaluate.flocked``) and which it does not."""
     if not without:
         raise ValueError("needs() takes at least one leave-one-out record")
+    def listed(xs):
+        return xs[0] if len(xs) == 1 else ", ".join(xs[:-1]) + " or " + xs[-1]
+
     needed = [d for d, rec in without.items() if not flocked(rec)]
     spare = [d for d, rec in without.items() if flocked(rec)]
     if not spare:
         return (f"VGAI flocks only with every departure from the paper that the book left out in turn: without "
-                f"any one of them ({', '.join(needed)}) it does not flock.")
+                f"any one of them ({listed(needed)}) it does not flock.")
     if not needed:
         return f"VGAI still flocks without any one of the departures the book left out in turn ({', '.join(spare)})."
-    return f"VGAI still flocks without {', '.join(spare)}; it does not flock without {', '.join(needed)}."
+    return f"VGAI still flocks without {listed(spare)}; it does not flock without {listed(needed)}."
 
 
 def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) -> str:
