@@ -542,12 +542,12 @@ C = limit["controllers"]
 pilot = next(v for k, v in C.items() if k.startswith("modular"))["5s"]
 mixture = next(v for k, v in C.items() if k.startswith("VGAI without the learner"))["5s"]
 seeds = [v["5s"] for k, v in C.items() if "the book's recipe" in k]
-weaker = [pilot["damping_gain_median"] / x["damping_gain_median"] for x in seeds]
-prose("At 5 s, the recipe without the learner flying alone brakes {m:.1f} times more weakly than the modular vision "
-      "pilot (the same kind of CNN feeding the DAGNN's MLP), with a forcing at rest of {mf:.3f} m/s²; the book's recipe "
-      "brakes {lo:.1f} to {hi:.1f} times more weakly than the pilot over its {n} training seeds, with a forcing of "
-      "{flo:.3f} to {fhi:.3f} m/s².", m=pilot["damping_gain_median"] / mixture["damping_gain_median"],
-      mf=mixture["forcing_at_rest_rms_median"], lo=min(weaker), hi=max(weaker), n=len(seeds),
+prose("At 5 s, the modular vision pilot (the same kind of CNN feeding the DAGNN's MLP) brakes with a gain of {pg:.1f} /s; "
+      "the recipe without the learner flying alone with {mg:.1f} /s and a forcing at rest of {mf:.3f} m/s²; the book's "
+      "recipe with {lo:.1f} to {hi:.1f} /s over its {n} training seeds and a forcing of {flo:.3f} to {fhi:.3f} m/s².",
+      pg=pilot["damping_gain_median"], mg=mixture["damping_gain_median"],
+      mf=mixture["forcing_at_rest_rms_median"], lo=min(x["damping_gain_median"] for x in seeds),
+      hi=max(x["damping_gain_median"] for x in seeds), n=len(seeds),
       flo=min(x["forcing_at_rest_rms_median"] for x in seeds), fhi=max(x["forcing_at_rest_rms_median"] for x in seeds))
 
 # %% [markdown]
