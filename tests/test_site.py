@@ -21,7 +21,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
-from devtools import CHROMIUM, DevTools, free_port, start_chromium, wait_http
+from devtools import CHROMIUM, DevTools, free_port, start_chromium, stop, wait_http
 
 pytestmark = pytest.mark.slow  # `pytest -m "not slow"` skips this file
 
@@ -60,12 +60,7 @@ def site(tmp_path_factory):
         yield tools, base, info
         tools.close()
     finally:
-        for p in (chrome, server):
-            p.terminate()
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop(chrome, server)
 
 
 PAGE_STATE = """(async () => {

@@ -91,3 +91,13 @@ class DevTools:
 
     def close(self):
         self.ws.close()
+
+
+def stop(*procs: subprocess.Popen, seconds: float = 20) -> None:
+    """End each process (the browser, a server): terminate, then kill if it has not exited within ``seconds``."""
+    for p in procs:
+        p.terminate()
+        try:
+            p.wait(timeout=seconds)
+        except subprocess.TimeoutExpired:
+            p.kill()

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Optional, Union
 
 from . import website
-from .chromium import CHROMIUM, DevTools, free_port, start_chromium, wait_http
+from .chromium import CHROMIUM, DevTools, free_port, start_chromium, stop, wait_http
 
 LOAD_SECONDS = 90
 """How long a page may take to load and typeset before printing gives up with an error."""
@@ -162,12 +162,7 @@ def print_site(site: Union[str, Path], out: Union[str, Path], pages: list[str]) 
             front, _ = _print_page(tools, f"{base}/_front.html")
             tools.close()
         finally:
-            for p in (chrome, server):
-                p.terminate()
-                try:
-                    p.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    p.kill()
+            stop(chrome, server)
     if len(PdfReader(io.BytesIO(front)).pages) != front_pages:
         raise RuntimeError("the contents no longer fit on one page: count its pages before numbering the chapters")
     writer = PdfWriter()
