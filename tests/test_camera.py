@@ -105,3 +105,34 @@ def test_a_training_through_the_camera_runs_every_stage_and_returns_a_clean_eyed
     clean, _ = train_vgai(cfg, dataclasses.replace(tcfg, camera=CameraRanges()), progress=False, check_episodes=1)
     assert ctrl.camera is None and VGAITrainConfig.from_dict(ctrl.meta["train_config"]) == tcfg
     assert hist["warm_loss"] != clean.meta["history"]["warm_loss"]  # stage 1 saw other images
+
+
+def test_exposure_and_sensor_noise_touch_the_intensity_and_a_depth_channel_errs_in_proportion_to_distance():
+    """A depth camera: photometric noise and exposure act on "gray" only; the depth channel's error is a
+    share of the distance (D = depth_scale / d, so D exp(-share n)), and the sky gives no return."""
+    render = RenderConfig()
+    img = _frames(render)                                              # (B, N, [gray, depth], H, W)
+    gen = lambda: torch.Generator().manual_seed(0)  # noqa: E731
+    noisy = sensor_noise(img, 0.05, gen(), render.channels)
+    assert torch.equal(noisy[:, :, 1], img[:, :, 1]) and not torch.equal(noisy[:, :, 0], img[:, :, 0])
+    assert torch.equal(sensor_noise(img[:, :, :1], 0.05, gen(), ("gray",)), sensor_noise(img[:, :, :1], 0.05, gen()))
+    cam = Camera(CameraRanges(gain=(1.2, 1.2), offset=(0.05, 0.05), depth_noise=(0.03, 0.03)), render, 2, CFG.N,
+                 torch.Generator().manual_seed(2))
+    seen = cam.frame(img, 7)
+    assert torch.allclose(seen[:, :, 0], (1.2 * img[:, :, 0] + 0.05).clamp(0, 1))
+    D, Dc = img[:, :, 1], seen[:, :, 1]
+    body = (D > 0) & (D < 0.5)                                         # bodies, below the channel's cap
+    assert body.sum() > 100 and torch.equal(Dc[D == 0], D[D == 0])
+    rel = torch.log(D[body] / Dc[body])
+    assert abs(float(rel.std()) - 0.03) < 0.005 and abs(float(rel.mean())) < 0.005
+    with pytest.raises(ValueError, match="channels"):
+        sensor_noise(img, 0.05, gen(), ("gray",))
+
+
+def test_cameras_without_a_range_error_draw_what_they_drew_before_it_existed():
+    """Trainings through a camera recorded before ``depth_noise``: the same settings, the same frames."""
+    ranges = CameraRanges(noise=(0.0, 0.1), blur_deg=(0.0, 2.0), dead_share=0.3)
+    a = Camera(ranges, RenderConfig(), 3, CFG.N, torch.Generator().manual_seed(5))
+    g = torch.Generator().manual_seed(5)
+    noise, blur = torch.rand(3, generator=g) * 0.1, torch.rand(3, generator=g) * 2.0
+    assert torch.equal(a.noise, noise) and torch.equal(a.blur_deg, blur) and torch.equal(a.depth_noise, torch.zeros(3))

@@ -131,3 +131,19 @@ def test_quick_sweep_writes_every_cell_and_resumes(tmp_path):
         lo, hi = c["relative_cost_mean_ci95"]
         assert 0 < lo <= c["relative_cost_mean"] <= hi and 0 <= c["share_connected_at_end"] <= 1
         assert c["controller"] in ("Local", "DAGNN", "VGAI")
+
+
+def test_image_noise_falls_on_the_intensity_and_depth_noise_on_the_depth_channel(pilots):
+    """The shipped VGAI sees gray and depth: ImageNoise is a photosite's noise, DepthNoise a range error."""
+    from vgai_lite.lab.perturbations import DepthNoise, World
+
+    vgai = pilots["VGAI"]
+    channels = vgai.vision.render.channels
+    assert channels == ("gray", "depth") and perturbed(vgai, ImageNoise(0.05)).world.channels == channels
+    img = torch.rand(2, 5, 2, 12, 128) * (torch.rand(2, 5, 2, 12, 128) > 0.5)
+    world = World((ImageNoise(0.05), DepthNoise(0.05)), seed=3, channels=channels)
+    gray = ImageNoise(0.05).frame(img, 4, world, 0)
+    depth = DepthNoise(0.05).frame(img, 4, world, 1)
+    assert torch.equal(gray[:, :, 1], img[:, :, 1]) and not torch.equal(gray[:, :, 0], img[:, :, 0])
+    assert torch.equal(depth[:, :, 0], img[:, :, 0]) and not torch.equal(depth[:, :, 1], img[:, :, 1])
+    assert torch.equal(depth[img == 0], img[img == 0])  # no return stays no return

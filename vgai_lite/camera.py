@@ -8,7 +8,15 @@ camera delivers instead
 with G_b a Gaussian blur (the lens's point-spread function) of standard deviation ``blur_deg``
 degrees of view, so that a setting means the same at every resolution: a column of the panorama is
 90° / view_width wide, a row vertical_fov_deg / view_height tall. A dead camera shows 0 on its
-quarter of the panorama. The noise of a frame is drawn from a generator seeded by the frame's time,
+quarter of the panorama.
+
+Exposure and sensor noise are photometric: they act on the intensity channel ("gray",
+``PHOTOMETRIC``), the one the paper's drones have. A depth channel (the book's "depth camera",
+D = depth_scale / d) comes from a range sensor, which errs in proportion to the distance it
+measures: d_cam = d exp(depth_noise * n), i.e. D_cam = min(1, D exp(-depth_noise * n)) on the pixels
+that see a body (no return stays 0). Our choice, the paper has no depth: intensity noise of sigma
+added to D = 0.2 / d would be a range error of sigma / D, 50 % at 2 m for sigma = 0.05, where a
+commodity depth camera errs by about 2 %. The lens blur and a dead camera act on every channel. The noise of a frame is drawn from a generator seeded by the frame's time,
 so that in flight the frame a drone took at t - g, paired with the one of t (``vision``), is the very
 frame it saw then, noise included, and noise is independent between frames. (A training window's
 frames, its K steps and the frames g >= K steps before them, are all different frames: each draws
@@ -83,20 +91,51 @@ def blur_degrees(img: torch.Tensor, sigma_deg, render: RenderConfig) -> torch.Te
     return gaussian_blur(img, s / dx, s / dy)
 
 
-def sensor_noise(img: torch.Tensor, sigma, generator: torch.Generator) -> torch.Tensor:
-    """Gaussian noise of standard deviation ``sigma`` (a number, or one per swarm (B,)) on every pixel,
-    then clipped to [0, 1] as a sensor's range; the draws from ``generator``."""
+PHOTOMETRIC = ("gray",)
+"""The channels a photosite measures: exposure and sensor noise act on these; "depth" has its range noise."""
+
+
+def _only(img: torch.Tensor, changed: torch.Tensor, channels, kinds) -> torch.Tensor:
+    """``changed`` on the channels (dim -3 of img, named by ``channels``) whose name is in ``kinds``,
+    ``img`` on the others; every channel when ``channels`` is None (an image of intensities only)."""
+    if channels is None:
+        return changed
+    if len(channels) != img.shape[-3]:
+        raise ValueError(f"frames of {img.shape[-3]} channels (dim -3 of shape {tuple(img.shape)}) named by "
+                         f"{len(channels)} names {tuple(channels)!r}")
+    keep = torch.tensor([c in kinds for c in channels], device=img.device).view(-1, 1, 1)
+    return torch.where(keep, changed, img)
+
+
+def sensor_noise(img: torch.Tensor, sigma, generator: torch.Generator, channels=None) -> torch.Tensor:
+    """Gaussian noise of standard deviation ``sigma`` (a number, or one per swarm (B,)) on every pixel
+    of the intensity channels, then clipped to [0, 1] as a sensor's range; the draws from ``generator``.
+    ``channels`` names the channels of frames (..., C0, H, W) (``RenderConfig.channels``); None: every
+    channel is an intensity."""
     s = _per_swarm(sigma, img, img.dim() - 1)
     if not (s > 0).any():
         return img
     n = torch.randn(img.shape, generator=generator, dtype=img.dtype).to(img.device)
-    return (img + s * n).clamp(0.0, 1.0)
+    return _only(img, (img + s * n).clamp(0.0, 1.0), channels, PHOTOMETRIC)
 
 
-def exposure(img: torch.Tensor, gain, offset) -> torch.Tensor:
-    """gain * I + offset, clipped to [0, 1] (numbers, or one per swarm (B,))."""
+def range_noise(img: torch.Tensor, share, generator: torch.Generator, channels) -> torch.Tensor:
+    """A range sensor's error on the "depth" channel of frames (..., C0, H, W) named by ``channels``:
+    the distance off by a factor exp(share * n), n ~ N(0, 1) per pixel, so D = depth_scale / d becomes
+    min(1, D exp(-share * n)); pixels without a return (D = 0) stay 0. ``share`` a number or one per
+    swarm (B,)."""
+    s = _per_swarm(share, img, img.dim() - 1)
+    if "depth" not in channels or not (s > 0).any():
+        return img
+    n = torch.randn(img.shape, generator=generator, dtype=img.dtype).to(img.device)
+    return _only(img, (img * torch.exp(-s * n)).clamp(max=1.0), channels, ("depth",))
+
+
+def exposure(img: torch.Tensor, gain, offset, channels=None) -> torch.Tensor:
+    """gain * I + offset, clipped to [0, 1] (numbers, or one per swarm (B,)), on the intensity channels
+    (``channels`` as in ``sensor_noise``)."""
     g, o = (_per_swarm(x, img, img.dim() - 1) for x in (gain, offset))
-    return (g * img + o).clamp(0.0, 1.0)
+    return _only(img, (g * img + o).clamp(0.0, 1.0), channels, PHOTOMETRIC)
 
 
 def dead_camera(img: torch.Tensor, dead: torch.Tensor) -> torch.Tensor:
@@ -121,6 +160,8 @@ class CameraRanges:
         blur_deg: standard deviation of the lens blur, degrees of view; the paper's test: about 0.5°.
         gain, offset: exposure, gain * I + offset.
         dead_share: the share of drones with one dead camera (which one, drawn too).
+        depth_noise: a depth channel's relative range error (``range_noise``); e.g. 0.02, about a
+            commodity depth camera's at 2 m.
     """
 
     noise: tuple = (0.0, 0.0)
@@ -128,9 +169,10 @@ class CameraRanges:
     gain: tuple = (1.0, 1.0)
     offset: tuple = (0.0, 0.0)
     dead_share: float = 0.0
+    depth_noise: tuple = (0.0, 0.0)
 
     def __post_init__(self) -> None:
-        for name, lo_min in (("noise", 0.0), ("blur_deg", 0.0), ("gain", 0.0), ("offset", -1.0)):
+        for name, lo_min in (("noise", 0.0), ("blur_deg", 0.0), ("gain", 0.0), ("offset", -1.0), ("depth_noise", 0.0)):
             lo, hi = getattr(self, name)
             if not lo_min <= lo <= hi:
                 raise ValueError(f"CameraRanges: {name} must be (low, high) with {lo_min} <= low <= high, "
@@ -169,13 +211,17 @@ class Camera:
         which = torch.randint(len(CAMERAS), (B, N), generator=generator)
         self.dead = torch.where(has_dead, which, torch.full_like(which, -1))
         self.seed = int(torch.randint(0, 2 ** 62, (1,), generator=generator))
+        # drawn last, so that cameras without a range error draw exactly what they drew before it existed
+        self.depth_noise = draw(ranges.depth_noise) if ranges.depth_noise != (0.0, 0.0) else torch.zeros(B)
 
     def frame(self, img: torch.Tensor, frame_time: int) -> torch.Tensor:
         """Frame ``img`` (B, N, C0, H, W), taken at ``frame_time``, as these cameras deliver it."""
+        channels = self.render.channels
         img = blur_degrees(img, self.blur_deg, self.render)
-        img = exposure(img, self.gain, self.offset)
+        img = exposure(img, self.gain, self.offset, channels)
         gen = torch.Generator().manual_seed((self.seed * 1_000_003 + frame_time) % (2 ** 63))
-        img = sensor_noise(img, self.noise, gen)
+        img = sensor_noise(img, self.noise, gen, channels)
+        img = range_noise(img, self.depth_noise, gen, channels)
         return dead_camera(img, self.dead) if (self.dead >= 0).any() else img
 
     def repeat(self, k: int) -> "Camera":
@@ -183,7 +229,7 @@ class Camera:
         training window's K steps seen through one flight's cameras."""
         out = object.__new__(Camera)
         out.__dict__.update(self.__dict__)
-        for name in ("noise", "blur_deg", "gain", "offset", "dead"):
+        for name in ("noise", "blur_deg", "gain", "offset", "dead", "depth_noise"):
             setattr(out, name, getattr(self, name).repeat_interleave(k, dim=0))
         return out
 

@@ -57,10 +57,11 @@ def main(argv=None) -> int:
     p.add_argument("--dagger-rounds", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--learner-swarms", type=float, default=None, help="share of DAgger swarms the learner flies alone")
-    p.add_argument("--camera", default=None, metavar="NOISE:BLUR:GAIN:OFFSET:DEAD",
+    p.add_argument("--camera", default=None, metavar="NOISE:BLUR:GAIN:OFFSET:DEAD[:DEPTH]",
                    help="the training's cameras (VGAITrainConfig.camera, drawn per flight and window): ranges "
                         "lo,hi of sensor noise sigma, lens blur (degrees), gain and offset, then the share of "
-                        "drones with a dead camera, e.g. 0,0.08:0,1.5:0.8,1.2:-0.05,0.05:0.1")
+                        "drones with a dead camera, then optionally the range of the depth channel's relative range "
+                        "error, e.g. 0,0.08:0,1.5:0.8,1.2:-0.05,0.05:0.1:0,0.05")
     p.add_argument("--channels", default=None,
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--sensor", choices=("paper", "book"), default=None,
@@ -90,10 +91,11 @@ def main(argv=None) -> int:
         changes["sensor"] = args.sensor
     if args.camera is not None:
         parts = args.camera.split(":")
-        if len(parts) != 5:
-            raise SystemExit(f"--camera takes NOISE:BLUR:GAIN:OFFSET:DEAD, got {args.camera!r}")
-        ranges = [tuple(float(x) for x in part.split(",")) for part in parts[:4]]
-        tcfg = dataclasses.replace(tcfg, camera=CameraRanges(*ranges, dead_share=float(parts[4])))
+        if len(parts) not in (5, 6):
+            raise SystemExit(f"--camera takes NOISE:BLUR:GAIN:OFFSET:DEAD[:DEPTH], got {args.camera!r}")
+        ranges = [tuple(float(x) for x in part.split(",")) for part in parts[:4] + parts[5:]]
+        tcfg = dataclasses.replace(tcfg, camera=CameraRanges(*ranges[:4], dead_share=float(parts[4]),
+                                                             **({"depth_noise": ranges[4]} if len(parts) == 6 else {})))
         changes["camera"] = tcfg.camera.to_dict()
     if args.motion_gap is not None:  # a change inside the vision configuration: recorded by name
         tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=args.motion_gap))

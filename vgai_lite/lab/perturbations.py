@@ -4,8 +4,10 @@ Introduced in notebook 08. Each perturbation changes one stage of the learned co
 (``learned_controllers``), where it would happen on real drones:
 
     stage                         perturbation            what it models
-    the camera's frames           ImageNoise(sigma)       sensor noise: I + sigma n, n ~ N(0, 1) per pixel,
-                                                          then clipped to the sensor's range [0, 1]
+    the camera's frames           ImageNoise(sigma)       sensor noise: I + sigma n, n ~ N(0, 1) per pixel
+                                                          of the intensity channel, clipped to [0, 1]
+                                  DepthNoise(share)       a depth channel's range error: distances off by
+                                                          a factor exp(share n) per pixel
                                   Blur(sigma)             defocus or motion blur: a Gaussian of sigma pixels
                                   DeadCamera()            one of the four cameras (a quarter of the
                                                           panorama) black, a random one per drone and episode
@@ -36,7 +38,7 @@ from typing import Optional
 import torch
 
 from ..aggregation import AggregationBuffer
-from ..camera import blur_degrees, dead_camera, gaussian_blur, sensor_noise
+from ..camera import blur_degrees, dead_camera, gaussian_blur, range_noise, sensor_noise
 from ..flocking import check_state
 from ..graphs import adjacency, gso
 
@@ -67,16 +69,31 @@ class Perturbation:
 
 
 class ImageNoise(Perturbation):
-    """Gaussian pixel noise of standard deviation ``sigma`` on values in [0, 1], then clipped to [0, 1]."""
+    """Gaussian pixel noise of standard deviation ``sigma`` on the intensity channel's values in [0, 1],
+    then clipped to [0, 1] (``camera.sensor_noise``: a depth channel has its own error, DepthNoise)."""
 
     def __init__(self, sigma: float):
         self.sigma = _check(sigma, "ImageNoise sigma (pixel values are in [0, 1])", 0.0, 1.0)
 
     def frame(self, img, t, world, k):
-        return sensor_noise(img, self.sigma, world.frame_generator(t, k))
+        return sensor_noise(img, self.sigma, world.frame_generator(t, k), world.channels)
 
     def __repr__(self):
         return f"ImageNoise(sigma={self.sigma:g})"
+
+
+class DepthNoise(Perturbation):
+    """A depth channel's range error: each pixel's distance off by a factor exp(share n), n ~ N(0, 1)
+    (``camera.range_noise``); frames without a depth channel are left as they are."""
+
+    def __init__(self, share: float):
+        self.share = _check(share, "DepthNoise share (a relative range error)", 0.0, 1.0)
+
+    def frame(self, img, t, world, k):
+        return range_noise(img, self.share, world.frame_generator(t, k), world.channels)
+
+    def __repr__(self):
+        return f"DepthNoise(share={self.share:g})"
 
 
 class Blur(Perturbation):
@@ -180,8 +197,9 @@ def _mix(*ints: int) -> int:
 class World:
     """The perturbations of one wrapped controller, with their random draws (seeded) and the clock."""
 
-    def __init__(self, perturbations: tuple, seed: int):
+    def __init__(self, perturbations: tuple, seed: int, channels: Optional[tuple] = None):
         self.perturbations, self.seed = tuple(perturbations), seed
+        self.channels = channels  # the names of the frames' channels (RenderConfig.channels), for the camera
         self.delay = sum(p.delay for p in self.perturbations)
         self.reset()
 
@@ -256,7 +274,7 @@ class Perturbed:
             if type(p).positions is not Perturbation.positions and vision is not None:
                 raise ValueError(f"{p!r} acts on the exact features' positions; VGAI sees only images")
         self.controller, self.sees = controller, vision is not None
-        self.world = World(perturbations, seed)
+        self.world = World(perturbations, seed, vision.render.channels if vision is not None else None)
         self.buffer = DelayedBuffer(controller.K, self.world.delay)  # the exchanges, as they arrive here
         self.name = f"{getattr(controller, 'name', 'controller')} + {', '.join(map(repr, perturbations)) or 'nothing'}"
 
