@@ -148,13 +148,13 @@ def test_the_camera_choice_takes_the_lowest_clean_validation_cost_per_sensor(tmp
     from vgai_lite.book import VALIDATION_SEED
     from vgai_lite.lab.runs import CAMERA_RUNS, chosen_camera_runs
 
-    costs = {"vgai_camera": 2.7, "vgai_camera_gray": 1.5, "vgai_camera_narrow": 2.6, "vgai_camera_narrow_gray": 1.9}
+    costs = {"vgai_depthcam_wide": 2.7, "vgai_camera_gray": 1.5, "vgai_depthcam": 2.6, "vgai_camera_narrow_gray": 1.9}
     for name, c in costs.items():
         rec = {"settings": {"clean": {"relative_cost_mean": c, "seed": VALIDATION_SEED},
                             "noise0.05": {"relative_cost_mean": 0.1, "seed": VALIDATION_SEED}}}
         (tmp_path / f"{name}_cameras.json").write_text(_json.dumps(rec))
     # by the clean cost, never by a perturbed one
-    assert chosen_camera_runs(tmp_path) == {"gray + depth": "vgai_camera_narrow", "gray only": "vgai_camera_gray"}
+    assert chosen_camera_runs(tmp_path) == {"gray + depth": "vgai_depthcam", "gray only": "vgai_camera_gray"}
     rec = _json.loads((tmp_path / "vgai_camera_gray_cameras.json").read_text())
     rec["settings"]["clean"]["seed"] = VALIDATION_SEED + 2000  # e.g. the test episodes: no choice on them
     (tmp_path / "vgai_camera_gray_cameras.json").write_text(_json.dumps(rec))

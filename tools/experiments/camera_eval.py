@@ -1,10 +1,11 @@
 """Experiment: a VGAI flown through the cameras of notebook 08's curves, judged as a user would.
 
-    python tools/experiments/camera_eval.py --checkpoint data/experiments/vgai_camera.pt --name vgai_camera
+    python tools/experiments/camera_eval.py --checkpoint data/experiments/vgai_depthcam.pt --name vgai_depthcam
 
 Flies the checkpoint on ``--episodes`` episodes of ``--seed`` (default the validation episodes: the
 recipes are choices) with clean frames, with sensor noise sigma in NOISE and with lens blur in BLUR
-(degrees of view, ``camera.blur_degrees``), and with one dead camera per drone; writes
+(degrees of view, ``camera.blur_degrees``), with one dead camera per drone, and, for a depth
+camera, with the depth channel's relative range error in DEPTH (``camera.range_noise``); writes
 ``data/experiments/NAME_cameras.json``: per setting the relative cost with its interval, the velocity
 variance at 2 and 5 s, the share connected at 5 s, whether it flocked and whether it was as safe as
 the expert (``evaluate.flocked``, ``evaluate.as_safe_as_expert``), and the provenance.
@@ -25,13 +26,15 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite import FlockConfig, load_controller, relative_cost  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
 from vgai_lite.evaluate import as_safe_as_expert, flocked  # noqa: E402
-from vgai_lite.lab.perturbations import DeadCamera, ImageNoise, LensBlur, perturbed  # noqa: E402
+from vgai_lite.lab.perturbations import DeadCamera, DepthNoise, ImageNoise, LensBlur, perturbed  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 
 NOISE = (0.01, 0.02, 10 / 255, 0.05, 0.1)
 """Sensor noise sigmas of the curves (10/255: the authors' test)."""
 BLUR = (0.5, 1.4, 2.8)
 """Lens blur, degrees of view (0.5°: the authors' 5 x 5 box at 144 x 256)."""
+DEPTH = (0.02, 0.05)
+"""A depth channel's relative range error (about 2 %: a commodity depth camera at 2 m)."""
 
 
 def main(argv=None) -> int:
@@ -50,6 +53,8 @@ def main(argv=None) -> int:
     settings.update({f"noise{s:.4g}": (ImageNoise(s),) for s in NOISE})
     settings.update({f"blur{b:g}": (LensBlur(b, base.vision.render),) for b in BLUR})
     settings["dead"] = (DeadCamera(),)
+    if "depth" in base.vision.render.channels:
+        settings.update({f"depth{d:g}": (DepthNoise(d),) for d in DEPTH})
     if args.only:
         settings = {k: v for k, v in settings.items() if k in args.only}
     command = " ".join(["python tools/experiments/camera_eval.py"] + (argv or sys.argv[1:]))

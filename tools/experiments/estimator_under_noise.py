@@ -5,7 +5,7 @@
 For each checkpoint (the shipped VGAI, trained on clean frames, and the VGAIs trained through the
 camera), its CNN's state-estimation head (kept by the book's recipe, ``aux_weight`` > 0) is read on
 expert flights from validation initial conditions (``book.VALIDATION_SEED``) seen through sensor
-noise of each sigma: the correlation of each of the six estimated local features (eq. 9:
+noise of each sigma (on the gray channel): the correlation of each of the six estimated local features (eq. 9:
 velocity differences, two repulsion sums) with the exact ones at t = 2, 8 and 20 steps, when the
 drones still move relative to each other. It says whether the images still carry what the
 controller needs at a noise level, or whether the CNN has stopped reading it.
@@ -32,8 +32,8 @@ from vgai_lite.state_estimation import estimator_quality  # noqa: E402
 
 SIGMAS = (0.0, 0.02, 10 / 255, 0.05, 0.1)
 TIMES = (2, 8, 20)
-CHECKPOINTS = ("vgai/vgai_F24", "experiments/vgai_camera", "experiments/vgai_camera_gray",
-               "experiments/vgai_camera_narrow", "experiments/vgai_camera_narrow_gray")
+CHECKPOINTS = ("vgai/vgai_F24", "experiments/vgai_depthcam_wide", "experiments/vgai_camera_gray",
+               "experiments/vgai_depthcam", "experiments/vgai_camera_narrow_gray")
 
 
 def main(argv=None) -> int:

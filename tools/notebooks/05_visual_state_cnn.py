@@ -88,7 +88,14 @@ plt.show()
 #
 # with $G_b$ a Gaussian blur of $b$ degrees of view (so that a setting means the same at every
 # resolution: a column here is 90°/32 = 2.8° wide, a row 5° tall), $a$ and $c$ the exposure's gain
-# and offset, and a dead camera showing 0 on its quarter of the panorama. The noise of a frame is
+# and offset, and a dead camera showing 0 on its quarter of the panorama. Exposure and sensor noise
+# are photometric: they act on the gray channel. The book's depth channel $D = 0.2/d$ would come
+# from a range sensor, whose error is a share $\varepsilon$ of the distance it measures:
+#
+# $$D_{\text{cam}} = \min\big(1,\ (G_b * D)\, e^{-\varepsilon\, n'}\big), \qquad n' \sim \mathcal N(0, 1) \text{ per pixel},$$
+#
+# and no return stays 0. (Adding $\sigma$ to $D$ as to an intensity would be a range error of
+# $\sigma / D$: 50% at 2 m for $\sigma$ = 0.05, where a commodity depth camera errs by about 2%.) The noise of a frame is
 # drawn from its own time, so the frame of $t - g$ that the motion channel pairs with the frame of
 # $t$ is the one the drone really saw then. The paper's authors test their VGAI with $\sigma$ =
 # 10/255 and a 5 × 5 box blur at 144 × 256, about 0.5°. Below, drone 0's front camera (gray channel

@@ -338,7 +338,7 @@ def main(argv=None):
     p = sub.add_parser("benchmark", help="agent-steps per second of step + expert_control")
     p.add_argument("--vgai", action="store_true", help="instead: VGAI training steps per second, projected training time")
     p.add_argument("--train-config", dest="train_config", default=None, metavar="RECORD",
-                   help="with --vgai: the training configuration of this record (e.g. data/experiments/vgai_camera.json)")
+                   help="with --vgai: the training configuration of this record (e.g. data/experiments/vgai_depthcam.json)")
     p.add_argument("--threads", type=int, default=None, help="torch threads (default torch's)")
     p = sub.add_parser("train-dagnn", help="train (or load) the book's DAGNNs, evaluate, write data/dagnn/")
     p.add_argument("names", nargs="*", help="runs to train, e.g. dagnn_K4")

@@ -88,8 +88,8 @@ PAPER_SEEDS = (0, 1, 2)
 """Training seeds of the paper's VGAI (``PAPER``) in the book's simulator: data/experiments/vgai_paper_seedS."""
 
 CAMERA_RUNS: dict[str, dict[str, str]] = {
-    "wide": {"gray + depth": "vgai_camera", "gray only": "vgai_camera_gray"},
-    "narrower": {"gray + depth": "vgai_camera_narrow", "gray only": "vgai_camera_narrow_gray"},
+    "wide": {"gray + depth": "vgai_depthcam_wide", "gray only": "vgai_camera_gray"},
+    "narrower": {"gray + depth": "vgai_depthcam", "gray only": "vgai_camera_narrow_gray"},
 }
 """The book's recipe trained through the camera (``VGAITrainConfig.camera``), by the width of the
 camera's ranges and the sensor: data/experiments/NAME.pt, .json and NAME_cameras.json (notebook 08)."""
