@@ -62,6 +62,9 @@ def main(argv=None) -> int:
                         "lo,hi of sensor noise sigma, lens blur (degrees), gain and offset, then the share of "
                         "drones with a dead camera, then optionally the range of the depth channel's relative range "
                         "error, e.g. 0,0.08:0,1.5:0.8,1.2:-0.05,0.05:0.1:0,0.05")
+    p.add_argument("--view-height", type=int, default=None,
+                   help="rows per camera (the renderer's view_height; default 12): apparent size, the monocular "
+                        "distance cue, in finer steps")
     p.add_argument("--channels", default=None,
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--sensor", choices=("paper", "book"), default=None,
@@ -105,6 +108,10 @@ def main(argv=None) -> int:
         render = dataclasses.replace(tcfg.vision.render, channels=channels)
         tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
         changes["channels"] = list(channels)
+    if args.view_height is not None:  # a change inside the vision configuration: recorded by name
+        render = dataclasses.replace(tcfg.vision.render, view_height=args.view_height)
+        tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
+        changes["view_height"] = args.view_height
     folder = DATA_DIR / "experiments"
     command = " ".join(["python tools/experiments/vgai_variant.py"] + (argv or sys.argv[1:]))
     ckpt = Path(args.evaluate) if args.evaluate else folder / f"{args.name}.pt"
