@@ -150,8 +150,8 @@ prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than
 # * **Two frames.** Our CNN sees each frame beside its difference with the frame 5 steps earlier;
 #   the paper's takes one frame, which shows where the neighbours are but not how they move
 #   (notebook 05, section 3). The paper's VGAI with its one frame is measured in notebook 06.
-# * **Clean frames.** The book's headline VGAI is trained and flown on noiseless renders; trained
-#   through a camera model it costs more (notebook 08; section 4 below).
+# * **Clean frames.** The book's headline VGAI is trained and flown on noiseless renders; notebook 08
+#   trains the same recipe through a camera model, and section 4 below says what it costs there.
 # * **Supervision on the exact features.** Stages 1 and 3 of the book's training regress the six
 #   exact local features (the state-estimation loss); the paper trains on the actions alone (eq. 10).
 # * **A noiseless simulator that is the expert's model.** Our drones are the paper's stated double
