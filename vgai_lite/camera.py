@@ -16,11 +16,12 @@ D = depth_scale / d) comes from a range sensor, which errs in proportion to the 
 measures: d_cam = d exp(depth_noise * n), i.e. D_cam = min(1, D exp(-depth_noise * n)) on the pixels
 that see a body (no return stays 0). Our choice, the paper has no depth: intensity noise of sigma
 added to D = 0.2 / d would be a range error of sigma / D, 50 % at 2 m for sigma = 0.05, where a
-commodity depth camera errs by about 2 %. The lens blur and a dead camera act on every channel. The noise of a frame is drawn from a generator seeded by the frame's time,
-so that in flight the frame a drone took at t - g, paired with the one of t (``vision``), is the very
-frame it saw then, noise included, and noise is independent between frames. (A training window's
-frames, its K steps and the frames g >= K steps before them, are all different frames: each draws
-its own noise.)
+commodity depth camera errs by about 2 %. The lens blur and a dead camera act on every channel.
+
+The noise of a frame is drawn from a generator seeded by the frame's time, so that in flight the
+frame a drone took at t - g, paired with the one of t (``vision``), is the very frame it saw then,
+noise included, and noise is independent between frames. (A training window's frames, its K steps
+and the frames g >= K steps before them, are all different frames: each draws its own noise.)
 
 The paper's authors test their VGAI with noise of sigma = 10/255 and a 5 x 5 box blur at 144 x 256
 (about 0.5° of view); the book's training draws these settings per flight (``CameraRanges``, domain
