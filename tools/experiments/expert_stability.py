@@ -13,7 +13,7 @@ which decays for N Ts < 2 (at once for N Ts = 1: N = 100 at the paper's Ts = 0.0
 without decaying at N Ts = 2 (N = 200), and grows for N Ts > 2 until the saturation u_max holds it.
 A controller that imitates the expert in those teams imitates an oscillation.
 
-Flies the expert (and the controllers given with ``--controller NAME=CKPT``) on validation episodes
+Flies the expert and the DAGNNs of ``DEFAULT_CONTROLLERS`` (or those given with ``--controller NAME=CKPT``) on validation episodes
 (``book.VALIDATION_SEED``) at each N' of ``--teams``, as ``reproduce.flight_config`` flies Table 2b's
 columns, to 5 s, and writes ``data/experiments/expert_stability.json``: per team the predicted factor
 1 - N Ts, the measured one (late in the flight, the regression of each drone's velocity deviation on
@@ -37,11 +37,13 @@ from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
 from vgai_lite.consensus import groups  # noqa: E402
 from vgai_lite.controllers import ExpertController  # noqa: E402
 from vgai_lite.flocking import rollout, sample_initial_state, velocity_variance  # noqa: E402
-from vgai_lite.lab.provenance import Provenance  # noqa: E402
+from vgai_lite.lab.provenance import Provenance, repo_relative, sha256  # noqa: E402
 from vgai_lite.lab.reproduce import ReproduceConfig, flight_config  # noqa: E402
 
 HORIZON_S = 5.0
 LATE_S = 1.0  # the measured factor is read over the flight's last second
+# the book's DAGNN (trained at N = 50) and the one trained on teams of 50, 100 and 200 (teams_and_radii.py)
+DEFAULT_CONTROLLERS = ("dagnn_K4=data/dagnn/dagnn_K4.pt", "dagnn_teams=data/experiments/dagnn_teams.pt")
 
 
 def step_factor(v: torch.Tensor, Ts: float):
@@ -70,8 +72,8 @@ def fly(controller, cfg, episodes: int) -> dict:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--teams", default="50,100,150,200,250")
-    p.add_argument("--controller", action="append", default=[], metavar="NAME=CKPT",
-                   help="also fly this checkpoint in every team (repeatable)")
+    p.add_argument("--controller", action="append", default=None, metavar="NAME=CKPT",
+                   help="also fly this checkpoint in every team (repeatable; default: " + ", ".join(DEFAULT_CONTROLLERS) + ")")
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--out", default=str(DATA_DIR / "experiments" / "expert_stability.json"))
@@ -79,7 +81,7 @@ def main(argv=None) -> int:
     torch.set_num_threads(args.threads)
     command = " ".join(["python tools/experiments/expert_stability.py"] + (argv or sys.argv[1:]))
     others = []
-    for spec in args.controller:
+    for spec in args.controller or DEFAULT_CONTROLLERS:
         name, sep, ckpt = spec.partition("=")
         if not sep or not name or not ckpt:
             raise SystemExit(f"--controller expects NAME=CKPT, got {spec!r}")
@@ -96,7 +98,7 @@ def main(argv=None) -> int:
             out["teams"][str(n)] = row
             print(json.dumps(row), flush=True)
     out["provenance"] = prov.record(seed=VALIDATION_SEED, episodes=args.episodes,
-                                    checkpoints={name: str(c) for name, c in others})
+                                    checkpoints={repo_relative(c): sha256(c) for _, c in others})
     Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
     print("wrote", args.out)
     return 0

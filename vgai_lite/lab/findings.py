@@ -7,7 +7,7 @@ training seeds, mean ± 1.96 × (spread over seeds) / √seeds. Then:
   a < b   when a's interval lies entirely below b's (the two do not overlap)
   a trend ("falls as F grows") holds when every step of the series is such a difference in the
           trend's direction; it is contradicted when some step is one in the other direction;
-          otherwise our numbers cannot tell (the differences are within the intervals).
+          otherwise our numbers cannot tell (at least one step is within its intervals).
 
 The paper reports no intervals: its column compares its numbers as printed.
 """
@@ -94,5 +94,5 @@ def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) 
     and the numbers behind it."""
     how = {HOLDS: "holds in ours: every step is larger than its intervals",
            CONTRADICTED: "does not hold in ours: some step goes the other way by more than its intervals",
-           CANNOT_TELL: "cannot be told from ours: the differences are within the intervals"}[verdict]
+           CANNOT_TELL: "cannot be told from ours: at least one step is within its intervals"}[verdict]
     return f"{claim}: {how} ({series_text(cells, labels)})."

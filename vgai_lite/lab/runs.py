@@ -103,7 +103,7 @@ def chosen_camera_runs(folder: Optional[Path] = None) -> dict[str, str]:
     chosen = {}
     for sensor in ("gray + depth", "gray only"):
         costs = {}
-        for ranges in CAMERA_RUNS.values():
+        for ranges in (r for r in CAMERA_RUNS.values() if sensor in r):
             rec = json.loads((folder / f"{ranges[sensor]}_cameras.json").read_text())["settings"]["clean"]
             if rec["seed"] != VALIDATION_SEED:
                 raise ValueError(f"{ranges[sensor]}_cameras.json is not on the validation episodes "
