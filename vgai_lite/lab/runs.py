@@ -95,6 +95,11 @@ CAMERA_RUNS: dict[str, dict[str, str]] = {
 camera's ranges and the sensor: data/experiments/NAME.pt, .json and NAME_cameras.json (notebook 08)."""
 
 
+CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthcam_seed2")
+"""The depth camera's recipe (CAMERA_RUNS' narrower ranges, gray + depth) from training seeds 0, 1 and 2:
+data/experiments/NAME.json, each judged on the validation episodes (notebook 08, its seed spread)."""
+
+
 def chosen_camera_runs(folder: Optional[Path] = None) -> dict[str, str]:
     """For each sensor of CAMERA_RUNS, the camera training with the lowest relative cost on clean
     frames of the validation episodes (``camera_eval``'s record, NAME_cameras.json): the rule of notebook
