@@ -80,6 +80,8 @@ def test_a_records_provenance_is_complete_and_names_its_checkpoint(path, rec):
 
 
 PINNED = [(p, r) for p, r in RECORDS if "pinned" in r]
+FLEW_APART = 20.0
+"""A pinned relative cost above this is a swarm that flew apart (the local heuristic costs about 4)."""
 
 
 def _flight(rec: dict) -> str:
@@ -120,8 +122,12 @@ def test_a_records_pinned_episodes_fly_again_to_the_same_costs(group):
         expert = rollout(ExpertController(cfg), cfg, r0[:1], v0[:1]).cost
     finally:
         torch.set_num_threads(threads)
-    assert torch.allclose(cost / expert, torch.tensor(rec["pinned"]["relative_cost"][:1]), rtol=2e-3), \
-        f"{path.name}: the first pinned episode now costs {(cost / expert).tolist()}"
+    pinned = torch.tensor(rec["pinned"]["relative_cost"][:1])
+    # a swarm that flies apart (FLEW_APART times the expert's cost) is chaotic: another CPU's last bits
+    # (vgai_book_one_frame.json, 129.0 pinned: 130.1 on an AVX-512 machine) move it by about 1 %
+    rtol = 2e-2 if float(pinned) > FLEW_APART else 2e-3
+    assert torch.allclose(cost / expert, pinned, rtol=rtol), \
+        f"{path.name}: the first pinned episode now costs {(cost / expert).tolist()} (pinned {pinned.tolist()}, rtol {rtol})"
 
 
 REPRODUCE_FIELDS = {"command", "git_commit", "library_modified_since_commit", "python", "torch_threads",
