@@ -373,6 +373,55 @@ prose("By the book's one criterion (intervals apart): at N = 50 summing is {s50}
 # the information "how many neighbours, how much disagreement"; the symmetric normalisation keeps
 # some of both.
 #
+# ### The expert itself, in larger teams
+#
+# Before asking the DAGNN to flock in teams of 200, ask the teacher. Unsaturated and away from the
+# potential, the expert of eq. 2 gives every drone $\mathbf u_i = -\sum_j(\mathbf v_i - \mathbf v_j)
+# = N(\bar{\mathbf v} - \mathbf v_i)$, and the double integrator steps
+# $\mathbf v_i(t+1) = \mathbf v_i(t) + T_s \mathbf u_i(t)$, so a drone's deviation from the mean obeys
+#
+# $$\mathbf v_i(t+1) - \bar{\mathbf v} = (1 - N T_s)\,(\mathbf v_i(t) - \bar{\mathbf v}).$$
+#
+# The factor $1 - N T_s$ is below one in size for $N T_s < 2$: the deviations decay (at once when
+# $N T_s = 1$). At $N T_s = 2$, which is $N = 200$ at the paper's $T_s$, it is $-1$: the deviations
+# flip sign every step and never decay; beyond, they grow until the saturation holds them. The
+# expert, flown in the teams of Table 2b on validation episodes to 5 s:
+
+# %%
+from vgai_lite.flocking import velocity_variance
+from vgai_lite.evaluate import FLOCKED_VARIANCE
+from vgai_lite.lab.reproduce import ReproduceConfig, flight_config
+
+expert_var, rows = {}, []
+for N in (50, 100, 150, 200):
+    c_N = flight_config(ReproduceConfig(), "N", N)
+    g = torch.Generator().manual_seed(VALIDATION_SEED)
+    r0, v0 = sample_initial_state(c_N, pick(10, 2), g)
+    traj = rollout(ExpertController(c_N), c_N, r0, v0, steps=int(round(5.0 / c_N.Ts)) + 1)
+    expert_var[N] = float(velocity_variance(traj.v)[-1].median())
+    rows.append(f"| {N} | {1 - N * c_N.Ts:+.1f} | {expert_var[N]:.1e} | "
+                f"{'yes' if expert_var[N] <= FLOCKED_VARIANCE else '**no**'} |")
+display(Markdown("| N' | 1 − N Ts | expert's velocity variance at 5 s (median) | below the flock threshold |\n"
+                 "|---|---|---|---|\n" + "\n".join(rows) + f"\n\n{pick(10, 2)} validation episodes (seed "
+                 f"{VALIDATION_SEED}); the flock threshold is {FLOCKED_VARIANCE:g} m²/s² (notebook 01)."))
+
+# %%
+import json
+
+stab = json.loads((DATA_DIR / "experiments" / "expert_stability.json").read_text())["teams"]["200"]
+sign = lambda a: "alternates in sign" if a is not None and a < 0 else "keeps its sign"
+prose("So a student who asks the DAGNN to flock at N' = 200 asks more than its teacher does. "
+      "`tools/experiments/expert_stability.py` measures the step factor late in the flight (the regression "
+      "of each drone's deviation on the one a step before; record `data/experiments/expert_stability.json`, "
+      "10 validation episodes): at N' = 200 the expert's is {e:+.2f}, so its deviation {es}; the DAGNN "
+      "trained at N = 50 has {k:+.2f} (its deviation {ks}: it never learned the oscillation), and one "
+      "trained on teams of 50, 100 and 200 has {t:+.2f} (its deviation {ts}: imitating the expert in "
+      "those teams taught it the oscillation).",
+      e=stab["expert"]["measured_factor"], es=sign(stab["expert"]["measured_factor"]),
+      k=stab["dagnn_K4"]["measured_factor"], ks=sign(stab["dagnn_K4"]["measured_factor"]),
+      t=stab["dagnn_teams"]["measured_factor"], ts=sign(stab["dagnn_teams"]["measured_factor"]))
+
+# %% [markdown]
 # ## 10. What the cost measures, and what it does not
 #
 # Eq. 1 scores velocity agreement only. Most of it accrues in the first steps (notebook 01, section 7, measured how much), while the expert

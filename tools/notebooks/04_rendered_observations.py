@@ -226,7 +226,7 @@ display(Markdown("| controller | episodes with a contact | contacts in all | lar
                  "|---|---|---|---|\n" + "\n".join(rows)))
 
 # %% [markdown]
-# **Notebook 01 reports close calls for the expert; is that a contradiction?** Notebook 01 counts the
+# **Close calls, measured two ways.** Notebook 01 counts the
 # episodes in which some pair comes closer than 0.1 m (two body radii: the bodies touch), on 50
 # working episodes. This table flies only the first of those episodes. On exactly these, our own simulator's
 # closest approaches give:

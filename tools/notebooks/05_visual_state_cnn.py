@@ -198,8 +198,9 @@ for name, (_, _, meta) in estimators.items():
     print(f"{name}: trained in {meta['seconds']:.0f} s")
 
 # %% [markdown]
-# The two-frame estimator is exactly stage 1 of VGAI trained with the paper's recipe (the same CNN,
-# steps, states, episodes and seed: the first row of notebook 06's ablation), whose training
+# The two-frame estimator is exactly stage 1 of the VGAI with the paper's CNN, action loss and DAgger
+# mixture but the book's sensor and warm starts (the same CNN, steps, states, episodes and seed: the
+# first row of notebook 06's ablation, which is not the paper's VGAI: section 6 of 06 flies that one), whose training
 # recorded how long that stage took; the two times should agree when both ran alone on the machine.
 # (The book's recipe changes stage 1 in two ways, synthetic relative velocities and odd motion
 # features, which notebook 06 adds and measures one at a time.)

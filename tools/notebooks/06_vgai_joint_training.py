@@ -180,7 +180,9 @@ display(Markdown(f"{first['episodes']} test episodes (seed {first['seed']}), F =
 v, d, l = test["vgai_F24"], test["dagnn_K4"], test["local"]
 safe = as_safe_as_expert(v)
 prose("A swarm that sees only images and talks to its neighbours lands between the exact-feature DAGNN ({dc:.2f}) and "
-      "the local heuristic ({lc:.2f}) at a relative cost of {vc:.2f}, against the paper's {vp:.2f}. {flock} "
+      "the local heuristic ({lc:.2f}) at a relative cost of {vc:.2f} (the paper prints {vp:.2f} for its VGAI, which sees "
+      "one gray frame and no depth; section 6 flies the paper's VGAI in this simulator, so the two numbers are not the "
+      "same method). {flock} "
       "{safety}",
       dc=d["relative_cost_mean"], lc=l["relative_cost_mean"], vc=v["relative_cost_mean"], vp=PAPER["R"]["VGAI"][1.5],
       flock=("It flocks: at 5 s its drones' velocities differ by {rms:.3f} m/s RMS ({ratio:.0f}× the DAGNN's variance), "

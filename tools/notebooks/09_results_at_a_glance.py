@@ -201,10 +201,12 @@ cams = {sensor: load(f"experiments/{name}_cameras.json")["settings"] for sensor,
 authors = f"noise{10 / 255:.4g}"
 cams_seed1 = load(f"experiments/{chosen_camera_runs()['gray only']}_seed1_cameras.json")["settings"]
 cam_flocked = sum(flocked(c[k]) for c in cams.values() for k in ("clean", authors))
+expert_200 = load("experiments/expert_stability.json")["teams"]["200"]
+does = lambda rec: "does" if flocked(rec) else "does not"
 items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "
-    f"the gray channel only it does not (variance at 5 s {gray['velocity_variance_median']['5s']:.1e} m²/s²), and "
-    "trained through the camera it does not either (validation episodes, clean frames: "
+    f"the gray channel only it {does(gray)} (variance at 5 s {gray['velocity_variance_median']['5s']:.1e} m²/s²), and "
+    f"trained through the camera it {does(cams['gray only']['clean'])} (validation episodes, clean frames: "
     f"{cams['gray only']['clean']['relative_cost_mean']:.2f}, variance at 5 s "
     f"{cams['gray only']['clean']['velocity_variance_median']['5s']:.1e} m²/s², connected in "
     f"{cams['gray only']['clean']['share_connected_at_end']:.0%}; trained from a second seed, "
@@ -220,7 +222,11 @@ items = [
                                    f"{n_vgai[c]['expert_share_below_0.05m']:.0%}; median closest approach "
                                    f"{n_vgai[c]['median_min_distance'] / n_vgai[c]['expert_median_min_distance']:.2f}× "
                                    "the expert's)" for c in unsafe))
-    + f" (Table 3, notebook 07{tables_note}). More drones crowd each panorama, and no training saw more than 50.",
+    + f" (Table 3, notebook 07{tables_note}). More drones crowd each panorama, and no training saw more than 50. "
+    f"At N' = 200 the teacher itself does not flock: the expert of eq. 2, sampled at Ts = {expert_200['Ts']:g} s, "
+    f"multiplies each velocity deviation by 1 − N Ts = {expert_200['predicted_factor']:+.0f} per step, and its variance "
+    f"at 5 s is {expert_200['expert']['velocity_variance_median']['5s']:.1e} m²/s² "
+    f"(`data/experiments/expert_stability.json`, notebook 03).",
     f"* **Noisy cameras.** With pixel noise of sigma {robustness.TARGETS['image_noise_sigma']:g} the "
     + ("book's VGAI" if rob_current else "earlier VGAI (the robustness sweep is not yet recomputed for the shipped one)")
     + f" costs {noisy['relative_cost_mean']:.2f}: its motion channels, a difference of two frames, drown (notebook 08). "
@@ -228,7 +234,9 @@ items = [
     f"{cams['gray + depth']['clean']['relative_cost_mean']:.2f} on clean frames and "
     f"{cams['gray + depth'][authors]['relative_cost_mean']:.2f} at the authors' noise of 10/255, the gray-only one "
     f"{cams['gray only']['clean']['relative_cost_mean']:.2f} and {cams['gray only'][authors]['relative_cost_mean']:.2f} "
-    f"(validation episodes; flocked in {cam_flocked} of these four). "
+    f"(validation episodes; variance at 5 s " + ", ".join(
+        f"{c[k]['velocity_variance_median']['5s']:.1e}" for c in cams.values() for k in ("clean", authors))
+    + f" m²/s² in that order, so flocked in {cam_flocked} of these four). "
     + ("At 10/255 the noise costs each of them at most a quarter of its clean cost"
        if all(c[authors]["relative_cost_mean"] <= 1.25 * c["clean"]["relative_cost_mean"] for c in cams.values())
        else "The noise still costs them more than a quarter of their clean cost")

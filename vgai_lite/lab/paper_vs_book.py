@@ -27,7 +27,7 @@ def _rows() -> dict:
             "Microsoft AirSim: rendered drones, 2-D motion at a common height",
             f"the stated double integrator, exact for constant u (`flocking.step`), Ts = {cfg.Ts} s; "
             "our own batched renderer for the images, checked against a pymunk ray caster",
-            "minutes on a laptop CPU instead of a game engine; notebook 04"),
+            "a laptop CPU instead of a game engine; notebook 04"),
         "observation": (
             "four AirSim RGB cameras (front-centre, front-left, front-right, back), 144 × 256 each, "
             "concatenated; one frame per step",
@@ -57,7 +57,8 @@ def _rows() -> dict:
             f"6 exact features ({tv.warm_steps} steps, half of the states with synthetic relative "
             f"velocities), (2) the MLP on the frozen CNN; then {tv.dagger_rounds} DAgger rounds of joint BPTT "
             f"with the state-estimation loss kept (weight {tv.aux_weight:g})",
-            "the book's addition, to train in minutes on 2 cores; notebooks 05-06"),
+            "the book's addition: from random weights, at the book's budget, the paper's end-to-end imitation "
+            "found nothing to act on (notebook 06, section 6); notebooks 05-06"),
         "GSO": (
             "S(t) respects the graph's sparsity (adjacency, Laplacian or normalisations cited); which one "
             "is not said (the public reference code averages)",
