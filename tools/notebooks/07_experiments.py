@@ -553,7 +553,9 @@ display(Markdown("\n".join(bullets)))
 from vgai_lite.evaluate import as_safe_as_expert
 
 TEAM_RUNS = {"shipped (N = 50, R = 1.5 m)": "dagnn_K4", "teams 50, 100, 200": "dagnn_teams",
-             "R in [1, 2] m": "dagnn_radii", "both": "dagnn_teams_radii"}
+             "R in [1, 2] m": "dagnn_radii", "both": "dagnn_teams_radii",
+             "teams 50, 100 (the expert stable)": "dagnn_teams_stable",
+             "teams 50, 100 and R in [1, 2] m": "dagnn_teams_radii_stable"}
 team_recs = {label: json.loads((DATA_DIR / "experiments" / f"{name}_teams.json").read_text())["cells"]
              for label, name in TEAM_RUNS.items()}
 team_cols = list(next(iter(team_recs.values())))
@@ -585,6 +587,25 @@ prose("Drawing both in training makes the DAGNN flock where the shipped one does
       c100=both_t["N=100"]["relative_cost_mean"], c200=both_t["N=200"]["relative_cost_mean"],
       d100=shipped_t["N=100"]["relative_cost_mean"], d200=shipped_t["N=200"]["relative_cost_mean"],
       l100=lower("N=100"), l200=lower("N=200"))
+
+# %%
+stab = json.loads((DATA_DIR / "experiments" / "expert_stability.json").read_text())["teams"]
+st, srt = team_recs["teams 50, 100 (the expert stable)"], team_recs["teams 50, 100 and R in [1, 2] m"]
+prose("The expert itself does not flock at N' = 200: sampled at Ts it multiplies a velocity deviation by 1 − N Ts "
+      "per step, which is {p200:+.0f} there (notebook 03, section 9; its variance at 5 s is {e200:.1e} m²/s²). Trained "
+      "only on teams of 50 and 100, where that factor is {p50:+.1f} and {p100:+.1f}, the DAGNN does not flock even at "
+      "N = 50 (variance at 5 s {s50:.1e} m²/s², connected at 5 s in {sc50:.0%} of episodes); its step factor there is "
+      "{f50:+.2f}, so its swarm does not oscillate, it splits. With R drawn as well it ends at {r50:.1e} at N = 50 and "
+      "{r200:.1e} at N' = 200 ({rc200:.0%} connected). {best}",
+      p200=stab["200"]["predicted_factor"], e200=stab["200"]["expert"]["velocity_variance_median"]["5s"],
+      p50=stab["50"]["predicted_factor"], p100=stab["100"]["predicted_factor"],
+      s50=st["N=50"]["velocity_variance_median"]["5s"], sc50=st["N=50"]["share_connected_at_end"],
+      f50=stab["50"]["dagnn_teams_stable"]["measured_factor"],
+      r50=srt["N=50"]["velocity_variance_median"]["5s"], r200=srt["N=200"]["velocity_variance_median"]["5s"],
+      rc200=srt["N=200"]["share_connected_at_end"],
+      best="Flocked at N' = 200: {}. Flocked at both N = 50 and N' = 100: {}.".format(
+          ", ".join(l for l, c in team_recs.items() if flocked(c["N=200"])) or "none",
+          ", ".join(l for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none"))
 
 # %% [markdown]
 # What favours ours. The list above explains why ours might differ; these are the advantages the
