@@ -195,6 +195,19 @@ def test_findings_use_one_criterion():
     assert "cannot be told" in findings.sentence("x", findings.CANNOT_TELL, [a, b], [6, 24])
 
 
+def test_a_series_that_cannot_be_told_names_its_clear_steps():
+    """03's 'each further exchange lowers it again': 1 → 2 is clear, 2 → 3 is not; the sentence says both."""
+    from vgai_lite.lab import findings
+
+    k1, k2, k3 = ({"relative_cost_mean": m, "relative_cost_mean_ci95": [m - h, m + h]}
+                  for m, h in ((1.29, 0.035), (1.15, 0.015), (1.14, 0.02)))
+    verdict = findings.trend([k1, k2, k3], -1)
+    assert verdict == findings.CANNOT_TELL
+    text = findings.sentence("Each further exchange lowers it", verdict, [k1, k2, k3], [1, 2, 3])
+    assert "1 → 2 lower, 2 → 3 within the intervals" in text
+    assert "step by step" not in findings.sentence("x", findings.trend([k1, k2], -1), [k1, k2], [1, 2])
+
+
 def test_the_sentence_on_what_the_flock_needs_names_each_departure_by_its_record():
     from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE
     from vgai_lite.lab import findings
@@ -253,3 +266,14 @@ def test_as_safe_as_expert_reads_both_safety_figures_against_the_experts():
     assert not as_safe_as_expert({**rec, "median_min_distance": 0.14})         # below 0.9 of the expert's
     with pytest.raises(ValueError, match="expert_share_below_0.05m"):
         as_safe_as_expert({"share_below_0.05m": 0.0, "median_min_distance": 0.1, "expert_median_min_distance": 0.1})
+
+
+def test_a_variance_near_the_flock_threshold_prints_so_that_its_label_can_be_read():
+    from vgai_lite.evaluate import FLOCKED_VARIANCE, variance_text
+
+    assert variance_text(1.4e-3) == "1.4e-03" and variance_text(0.0) == "0.0e+00"
+    below, above = variance_text(0.9993 * FLOCKED_VARIANCE), variance_text(1.0102 * FLOCKED_VARIANCE)
+    assert below != above and float(below) <= FLOCKED_VARIANCE < float(above)
+    for bad in (float("nan"), -1e-3):
+        with pytest.raises(ValueError, match="non-negative"):
+            variance_text(bad)

@@ -142,19 +142,29 @@ def test_the_plain_cnn_records_of_retrained_configurations_are_kept():
         assert VGAITrainConfig.from_dict(rec["train_config"]) == tcfg, name
 
 
-def test_the_camera_choice_takes_the_lowest_clean_validation_cost_per_sensor(tmp_path):
+def test_the_camera_choice_follows_the_seed_rule_on_clean_validation_frames(tmp_path):
+    """By runs.SEED_RULE on clean frames of the validation episodes: among the trainings that flocked the
+    cheapest (the cheapest of all where none flocked), never by a perturbed setting."""
     import json as _json
 
     from vgai_lite.book import VALIDATION_SEED
     from vgai_lite.lab.runs import CAMERA_RUNS, chosen_camera_runs
 
-    costs = {"vgai_depthcam_wide": 2.7, "vgai_camera_gray": 1.5, "vgai_depthcam": 2.6, "vgai_camera_narrow_gray": 1.9}
-    for name, c in costs.items():
-        rec = {"settings": {"clean": {"relative_cost_mean": c, "seed": VALIDATION_SEED},
-                            "noise0.05": {"relative_cost_mean": 0.1, "seed": VALIDATION_SEED}}}
+    def summary(cost, variance):
+        return {"relative_cost_mean": cost, "seed": VALIDATION_SEED, "flocking_horizon_s": 5.0,
+                "velocity_variance_median": {"2s": variance, "5s": variance}, "share_connected_at_end": 1.0}
+
+    costs = {"vgai_depthcam_wide": (2.7, 1e-3), "vgai_camera_gray": (1.5, 1e-2), "vgai_depthcam": (2.6, 1e-3),
+             "vgai_camera_narrow_gray": (1.9, 2e-2)}
+    for name, (c, var) in costs.items():
+        rec = {"settings": {"clean": summary(c, var), "noise0.05": summary(0.1, 1e-4)}}
         (tmp_path / f"{name}_cameras.json").write_text(_json.dumps(rec))
-    # by the clean cost, never by a perturbed one
+    # by the clean cost, never by a perturbed one; gray only: neither flocks, so the cheaper
     assert chosen_camera_runs(tmp_path) == {"gray + depth": "vgai_depthcam", "gray only": "vgai_camera_gray"}
+    rec = _json.loads((tmp_path / "vgai_depthcam_cameras.json").read_text())
+    rec["settings"]["clean"]["velocity_variance_median"]["5s"] = 5e-3  # cheaper, but its swarm does not settle
+    (tmp_path / "vgai_depthcam_cameras.json").write_text(_json.dumps(rec))
+    assert chosen_camera_runs(tmp_path)["gray + depth"] == "vgai_depthcam_wide"
     rec = _json.loads((tmp_path / "vgai_camera_gray_cameras.json").read_text())
     rec["settings"]["clean"]["seed"] = VALIDATION_SEED + 2000  # e.g. the test episodes: no choice on them
     (tmp_path / "vgai_camera_gray_cameras.json").write_text(_json.dumps(rec))

@@ -422,3 +422,15 @@ def test_the_seed_rule_prefers_a_flock_to_a_lower_cost():
     assert pick_seed({k: {**v, "flocked": False} for k, v in c.items()}) == "a"
     with pytest.raises(ValueError, match="at least one"):
         pick_seed({})
+
+
+def test_how_a_training_ran_says_alone_or_sharing_from_its_provenance():
+    from vgai_lite.lab.runs import how_trained
+
+    def rec(threads, load):
+        return {"provenance": {"training": {"torch_threads": threads, "load_average_mean": load}}}
+
+    assert how_trained(rec(2, 2.2)) == "2 threads, alone"
+    assert how_trained(rec(1, 2.0)) == "1 thread, sharing the cores"  # one of two trainings side by side
+    assert how_trained(rec(1, 1.1)) == "1 thread, alone"
+    assert how_trained({}) is None

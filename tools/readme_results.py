@@ -56,7 +56,7 @@ TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3 (exact fe
 
 
 def _test_labels() -> dict:
-    """TEST_LABELS, then the camera-trained VGAIs notebook 08 chooses and the paper's VGAI (notebook 06)."""
+    """TEST_LABELS, then the camera-trained VGAIs notebook 08 chooses and the paper's VGAI (notebook 11)."""
     labels = dict(TEST_LABELS)
     for sensor, name in chosen_camera_runs().items():
         labels[name] = f"VGAI trained through the camera, {sensor} (notebook 08's choice; clean frames here)"
@@ -141,9 +141,9 @@ def section() -> str:
         "Did it flock: the velocity variance (1/N) Σ‖v_i − v̄‖² (eq. 1's summand) at 2 s, the end of the paper's "
         "episode, and at 5 s of the same flights flown on (median over the episodes), and the share of episodes whose "
         "communication graph is still connected at 5 s."
-        + (" Rows marked \"not the book's recipe\" were trained before the recipe of notebook 06, section 6."
+        + (" Rows marked \"not the book's recipe\" were trained before the recipe of notebook 11, section 1."
            if any(_recipe(r) for r in vgai.values()) else
-           " Every VGAI here is trained with the book's recipe (notebook 06, section 6)."),
+           " Every VGAI here is trained with the book's recipe (notebook 11, section 1)."),
         "",
         f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. The VGAIs, stages "
         "1-3 in minutes, with the torch threads and the machine's mean load average while each trained (its record's "

@@ -47,6 +47,16 @@ def flocked(summary: dict) -> bool:
     return var["5s"] <= FLOCKED_VARIANCE and summary["share_connected_at_end"] >= FLOCKED_CONNECTED
 
 
+def variance_text(variance: float) -> str:
+    """A velocity variance for display beside a flocked / not-flocked label: one decimal (``1.4e-03``),
+    but four significant digits within 5 % of FLOCKED_VARIANCE, so that two values that print alike
+    do not carry opposite labels (``1.999e-03`` flocked, ``2.020e-03`` not)."""
+    v = float(variance)
+    if v != v or v < 0:
+        raise ValueError(f"a velocity variance is a non-negative number, got {variance!r}")
+    return f"{v:.3e}" if abs(v - FLOCKED_VARIANCE) <= 0.05 * FLOCKED_VARIANCE else f"{v:.1e}"
+
+
 SAFE_MARGIN, SAFE_FLOOR, SAFE_CLOSEST = 0.04, 0.05, 0.9
 """The book's definition of "as safe as the expert" (notebook 01), on the same episodes: the share of
 episodes with a pair closer than 0.05 m at most the expert's plus SAFE_MARGIN (or SAFE_FLOOR, whichever

@@ -167,7 +167,7 @@ class OddMotionCNN(VisualCNN):
     A swarm whose drones all move alike shows every drone D = 0, so its odd features are exactly
     0, and for small motions they are linear in D: a drone's estimate of its neighbours' relative
     velocities vanishes when they do, instead of settling on a bias that depends on where they
-    stand (the plain CNN's, measured in notebook 06). Then the aux head reads the 2 velocity
+    stand (the plain CNN's, measured in notebook 11). Then the aux head reads the 2 velocity
     features from the odd features only (no bias) and the 4 position features from the even ones.
     It costs a second pass of the trunk.
     """

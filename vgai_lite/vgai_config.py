@@ -7,7 +7,7 @@ action loss of eq. 10 alone, DAgger's mixture (p = 0.33). The paper gives the se
 the loss, the optimiser (Adam, learning rate 1e-3) and DAgger's probability; the training's length,
 the resolution and every other field are our choice, explained beside it. The book's VGAI (``BOOK``,
 ``book_recipe``) is the paper's with the book's departures (``BOOK_RECIPE``): its sensor and warm
-starts (``BOOK_SENSOR``) and the four changes notebook 06's ablation measures.
+starts (``BOOK_SENSOR``) and the four changes notebook 11's ablation measures.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ class VGAITrainConfig:
         seed: seed of the training initial conditions, sampling and weights.
         synthetic_share: stage 1 shows this share of its states with synthetic relative velocities
             (``vgai_training.synthetic_velocities``): the expert's own late states have almost none
-            to learn small motions from. Paper: 0; the book's recipe: 0.5 (notebook 06, section 6).
+            to learn small motions from. Paper: 0; the book's recipe: 0.5 (notebook 11, section 1).
         synthetic_speeds: the range (m/s) of those synthetic per-agent velocity deviations, from
             below the late-flight disagreements eq. 1 must remove to the early ones.
         motion_features: F_m, the CNN's last F_m features made odd in the motion channels
@@ -76,7 +76,7 @@ class VGAITrainConfig:
             at every step), the others under the paper's mixture (p_learner): the states the
             learner's own drifting leads to, late in a flight, labelled with the expert's braking.
             The book's recipe: 0.5 (0: the paper's mixture alone). Without it the recipe does not
-            flock, as without any other departure notebook 06's leave-one-out removes.
+            flock (notebook 11's leave-one-out, ``findings.needs``: the one sentence on what the flock needs).
         camera: what the training's cameras do to the rendered frames, drawn per flight and per
             training window (``camera.CameraRanges``: sensor noise, lens blur, exposure, a dead
             camera; domain randomisation). Every stage sees the frames through it: stage 1's states,
@@ -195,7 +195,7 @@ warm starts (stage 1's state estimation, stage 2's MLP fit): the departures ever
 
 BOOK_RECIPE = {**BOOK_SENSOR, "motion_features": None, "synthetic_share": 0.5, "aux_weight": 5.0,
                "learner_swarms": 0.5}
-"""The book's changes to the paper's VGAI: ``BOOK_SENSOR``, then the four measured in notebook 06's
+"""The book's changes to the paper's VGAI: ``BOOK_SENSOR``, then the four measured in notebook 11's
 ablation: odd motion features (F_m = F // 3), synthetic relative velocities in stage 1, the
 state-estimation loss kept in stage 3, half of DAgger's swarms flown by the learner alone."""
 

@@ -25,7 +25,7 @@ PALETTE = {"expert": "black", "centralized": "black", "DAGNN": "tab:blue", "VGAI
            "depth camera": "tab:red", "gray camera": "tab:pink"}
 """One colour per controller across the whole book (every figure takes it from here): the expert
 black, DAGNN blue, the book's VGAI orange, the local heuristic green, the modular vision pilot
-purple, the paper's VGAI (one gray frame, notebook 06) brown, and the VGAIs trained through a
+purple, the paper's VGAI (one gray frame, notebook 11) brown, and the VGAIs trained through a
 camera (notebook 08) red (gray + depth) and pink (gray only). ``controller_color`` finds a name's colour by the longest of these keys it contains."""
 
 

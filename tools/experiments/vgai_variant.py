@@ -15,7 +15,7 @@ writes the same record for a checkpoint trained before (its training time read f
 ``--note`` is stored in the record (e.g. that two trainings shared the two cores, so their
 training time is not the time of one alone).
 
-The hypotheses of notebook 06 that did not make VGAI flock (longer stored flights, stage 3's own
+The hypotheses of notebook 11 that did not make VGAI flock (longer stored flights, stage 3's own
 early share, the MLP fitted on exact features through the aux head, an anchor loss) are no longer
 knobs of the method; their records (``data/experiments/vgai_late500.json``, ``vgai_exact_mlp.json``,
 ``vgai_learner_late.json``) carry a ``rerun`` command that checks out the commit that trained them.

@@ -61,11 +61,11 @@ plt.show()
 # | **working episodes** | a third seed's initial conditions, held out from training, on which the chapters draw their pictures and compare designs while they teach: not a test | 01, `book.WORKING_SEED` |
 # | **repair sampling** | drawing initial positions for large teams by moving the agents that break a constraint instead of redrawing the whole swarm | 01, `FlockConfig.init_method` |
 # | **DAgger round** | fly swarms with the expert and the learner mixed, label every visited state with the expert's action, add them to the data, refit | 03, `imitation.dagger_mix` |
-# | **the learner flying alone** | a share of each DAgger round's swarms flown by the learner at every step, so its own drift is in the data | 06, `VGAITrainConfig.learner_swarms` |
+# | **the learner flying alone** | a share of each DAgger round's swarms flown by the learner at every step, so its own drift is in the data | 06, 11, `VGAITrainConfig.learner_swarms` |
 # | **prehistory** | the frames before $t = 0$, drawn from the initial velocities flown backwards, so the first motion image is not empty | 04, `VisionConfig.prehistory` |
-# | **odd motion features** | CNN features that change sign when the motion channel does, so they read zero when nothing moves | 05, 06, `VisualCNN.motion_features` |
+# | **odd motion features** | CNN features that change sign when the motion channel does, so they read zero when nothing moves | 05, 06, 11, `VisualCNN.motion_features` |
 # | **stage 1 / 2 / 3** | the book's VGAI training: the CNN warm-started as a state estimator, the MLP fitted on its features, then both trained together by K-step BPTT | 06, `vgai_training.train_vgai` |
-# | **modular vision pilot** | the CNN trained as a state estimator feeding the DAGNN's MLP, not trained end to end: the control experiment for VGAI | 06, 09 |
+# | **modular vision pilot** | the CNN trained as a state estimator feeding the DAGNN's MLP, not trained end to end: the control experiment for VGAI | 09, 11 |
 #
 # ## The paper and this book
 #
@@ -87,11 +87,12 @@ paper_vs_book.show()
 # | [**03** aggregation GNN](03_aggregation_gnn.ipynb) | a controller trained by imitation (DAgger) on exact local features: the paper's DAGNN baseline | §3.2, eqs. 7-10 |
 # | [**04** rendered observations](04_rendered_observations.ipynb) | what a drone sees: top-down and 360° egocentric images from our own renderer, checked against a pymunk ray caster; 3-D views | Fig. 4 |
 # | [**05** the visual CNN](05_visual_state_cnn.ipynb) | residual blocks, vertical-only pooling, $F$ features, visual state estimation | §3.3, Fig. 2 |
-# | [**06** VGAI](06_vgai_joint_training.ipynb) | CNN and DAGNN trained jointly, K-step backpropagation through time; what each of the book's departures from the paper buys | §3.4, Fig. 3 |
+# | [**06** VGAI](06_vgai_joint_training.ipynb) | CNN and DAGNN trained jointly, K-step backpropagation through time, evaluated on the test episodes | §3.4, Fig. 3 |
 # | [**07** experiments](07_experiments.ipynb) | the paper's tables regenerated, the paper's numbers beside ours | §4 |
 # | [**08** robustness](08_robustness.ipynb) | no silent NaN; noisy and dead cameras, lost and late messages, larger teams; a cure measured | §4 and beyond |
 # | [**09** results at a glance](09_results_at_a_glance.ipynb) | every controller on the test episodes; a fair comparison with the paper; what is still open | §4-5 |
 # | [**10** appendix: Ray](10_appendix_ray.ipynb) | the reproduction as Ray tasks; the full run projected on several machines | beyond |
+# | [**11** case study: what makes VGAI flock](11_what_makes_vgai_flock.ipynb) | the book's departures from the paper one at a time and left out in turn, against the spread between training seeds; the paper's VGAI as described | §3.3, beyond |
 #
 # Notebook 07's tables come from one command, `python -m vgai_lite reproduce` (its results ship in
 # `data/results/`).

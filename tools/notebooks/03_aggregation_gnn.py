@@ -148,7 +148,7 @@ prose("A uniform sample of agent-steps would spend most updates on states where 
 # collection is exercise 03.2 at the end of this notebook; the coin that decides who flies is
 # exercise 06.1.
 #
-# Everything else the paper leaves open is in one object, with our choices (a few minutes of CPU):
+# Everything else the paper leaves open is in one object, with our choices:
 
 # %%
 print(DAGNNTrainConfig())
@@ -290,7 +290,7 @@ from vgai_lite.lab import findings
 
 prose("By the book's one criterion (notebook 07, `vgai_lite/lab/findings.py`: a cost is lower than another when their 95% "
       "intervals do not overlap), {verdict} The DAGNN's mistakes are small, so the states it visits are not far from the "
-      "expert's; notebook 06 shows a learner whose mistakes are not small, where DAgger's data decides everything.",
+      "expert's; notebook 11 (section 6) shows a learner whose mistakes are not small, where DAgger's data decides everything.",
       verdict={-1: "DAgger lowers the cost here.", 0: "this budget cannot tell the two apart: the intervals overlap.",
                1: "behaviour cloning does better here."}[findings.compare(*dagger_cells)])
 
@@ -583,7 +583,7 @@ display(Markdown("| training | seed 0 | seed 1 | spread between the seeds |\n|--
 # ## Key takeaways
 #
 # * The DAGNN: exact local features, the delayed aggregation, one MLP shared by every drone, trained by imitating the expert.
-# * DAgger shows the learner the states its own mistakes lead to; for the DAGNN, whose mistakes are small, it buys little (section 7).
+# * DAgger shows the learner the states its own mistakes lead to; for the DAGNN, whose mistakes are small, section 7 measures what it buys.
 # * Exchanging with neighbours helps (section 8 says by how much, exchange by exchange); the GSO decides whether a controller trained with 50 drones works in denser teams.
 # * The cost hides what happens late in a flight: judge every controller by its cost, its safety and whether it flocked.
 #

@@ -184,7 +184,7 @@ print("after block 1:", tuple(maps.shape), "-> one row per channel, 128 bearings
 #
 # The book ships two estimators trained for 3,000 steps (8 swarm states, i.e. 400 images, per step)
 # on 40 expert episodes: one sees **two frames** (the default), one a **single frame**. Regenerate
-# them with `python -m vgai_lite train-vgai --estimators --retrain` (minutes each; see below). In quick
+# them with `python -m vgai_lite train-vgai --estimators --retrain` (each one's time is printed below). In quick
 # mode we also train a miniature one from scratch:
 
 # %%
@@ -200,21 +200,9 @@ for name, (_, _, meta) in estimators.items():
 # %% [markdown]
 # The two-frame estimator is exactly stage 1 of the VGAI with the paper's CNN, action loss and DAgger
 # mixture but the book's sensor and warm starts (the same CNN, steps, states, episodes and seed: the
-# first row of notebook 06's ablation, which is not the paper's VGAI: section 6 of 06 flies that one), whose training
-# recorded how long that stage took; the two times should agree when both ran alone on the machine.
+# first row of notebook 11's ablation (section 1), which is not the paper's VGAI: notebook 11 flies that one too, section 2).
 # (The book's recipe changes stage 1 in two ways, synthetic relative velocities and odd motion
-# features, which notebook 06 adds and measures one at a time.)
-
-# %%
-plain_vgai = load_controller(DATA_DIR / "experiments" / "vgai_F24_plain.pt").meta["history"]
-alone = estimators["two frames (g = 5)"][2]["seconds"]
-prose("Stage 1 inside that VGAI training took {inside:.0f} s; the shipped two-frame estimator, trained on "
-      "its own, {alone:.0f} s (its 40 expert episodes flown first included). {verdict}",
-      inside=plain_vgai["stage1_seconds"], alone=alone,
-      verdict=("They agree within a fifth." if abs(alone / plain_vgai["stage1_seconds"] - 1) < 0.2 else
-               "They differ by more than a fifth for the same work: a recorded time is that of the machine as it "
-               "was (each record's provenance says how busy it was); `python -m vgai_lite train-vgai --estimators "
-               "--retrain` on an idle machine measures it again."))
+# features, which notebook 11 adds and measures one at a time.)
 
 # %% [markdown]
 # How well does each estimate each feature? Correlation with the exact features on held-out expert
@@ -240,7 +228,7 @@ display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|-
 # drawn from the initial state flown backwards, `VisionConfig.prehistory`), and the velocity features
 # are estimated from the start. Late in an episode, when the swarm has flocked, relative velocities are
 # tiny and hard to see in either case; they add little to eq. 1 then, but whether the swarm *stays*
-# flocked depends on them (notebook 06, section 6).
+# flocked depends on them (notebook 11).
 
 # %%
 est, vis, _ = estimators["two frames (g = 5)"]

@@ -38,10 +38,11 @@ from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, ROOT, TEST_SEED, pick, prose
-from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, as_safe_as_expert, flocked
+from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, as_safe_as_expert, flocked, variance_text
 from vgai_lite.graphs import adjacency
 from vgai_lite.lab import findings
 from vgai_lite.lab.reproduce import PAPER, TABLES, load_results
+from vgai_lite.lab.runs import LEAVE_ONE_OUT
 from vgai_lite.viz import PALETTE, controller_color
 
 RERUN = False  # True: run `python -m vgai_lite reproduce` first (reuses what is computed; see above)
@@ -103,18 +104,16 @@ def table_markdown(table):
                       else f" ({x['ci95'][0]:.2f}-{x['ci95'][1]:.2f})" if x["ci95"] else "")
             paper = f" [{x['paper']:.2f}]" if x["paper"] is not None else ""
             var = x.get("velocity_variance_median")  # did it flock: variance at 5 s, connected at 5 s
-            flock = (f"<br>5 s: {var['5s']:.1e} m²/s², {x['share_connected_at_end']:.0%} connected: "
+            flock = (f"<br>5 s: {variance_text(var['5s'])} m²/s², {x['share_connected_at_end']:.0%} connected: "
                      f"{'flocked' if flocked(x) else '**did not flock**'}" if var else "")
-            other = "†" if x.get("book_recipe") is False else ""  # a VGAI not trained with the book's recipe
-            parts.append(f"**{x['relative_cost_mean']:.2f}**{other}{spread}{paper}{flock}")
+            assert x.get("book_recipe") is not False, (f"{table}/{row}/{c} flew a VGAI not trained with the book's "
+                                                       "recipe: `python -m vgai_lite reproduce` retrains it")
+            parts.append(f"**{x['relative_cost_mean']:.2f}**{spread}{paper}{flock}")
         lines.append(f"| {row} | " + " | ".join(parts) + " |")
     return (f"**{t['title']}** — ours in bold (95% CI over episodes, or ± std over training seeds), paper's in "
             "brackets; below, whether it flocked: the median velocity variance at 5 s and the share of episodes whose "
             f"graph is connected at 5 s, against the book's definition (notebook 01: at most {FLOCKED_VARIANCE:.0e} "
-            f"m²/s² and at least {FLOCKED_CONNECTED:.0%})"
-            + ("; † a VGAI trained before the book's recipe (DAgger's mixture only: notebook 06, section 6, row 4), "
-               "to be retrained" if any(x.get("book_recipe") is False for r in t["rows"].values() for x in r.values())
-               else "") + "\n\n" + "\n".join(lines))
+            f"m²/s² and at least {FLOCKED_CONNECTED:.0%})" + "\n\n" + "\n".join(lines))
 
 
 def plot_table(ax, table):
@@ -206,8 +205,10 @@ for table, row, direction, claim in trends:
     cols, cs = cells_of(table, row)
     if len(cs) < 2:
         continue  # a row this run did not compute (VGAI (retrained) needs --extras)
-    rows.append((claim, findings.paper_trend(paper_series(table, row.split(" (")[0]), direction),
-                 findings.trend(cs, direction), findings.series_text(cs, [f"{c:g}" for c in cols])))
+    verdict, labels = findings.trend(cs, direction), [f"{c:g}" for c in cols]
+    rows.append((claim, findings.paper_trend(paper_series(table, row.split(" (")[0]), direction), verdict,
+                 findings.series_text(cs, labels)
+                 + (f"; {findings.steps_text(cs, labels)}" if verdict != findings.HOLDS and len(cs) > 2 else "")))
 # two claims of the paper's section 4 about its bounds: the expert below every controller, Local above VGAI
 every = [(t, r, c, cell(t, r, c)) for t in results["tables"] for r in results["tables"][t]["rows"]
          for c in TABLES[t]["columns"] if cell(t, r, c) and r != "Local"]
@@ -353,7 +354,7 @@ assert check_variance_at(my_variance_at)
 # **The experiment.** Fly the book's controllers twice as long as the 5-s flights of the tables, on
 # the test episodes' initial conditions, and read your variance at 2, 5 and 10 s (median over the flights).
 # Which controllers keep aligning, which level off, and at what floor? Try other horizons, the
-# larger teams of Table 3, or the modular vision pilot of notebook 06 (section 6).
+# larger teams of Table 3, or the modular vision pilot of notebooks 09 and 11.
 
 # %%
 from vgai_lite import load_controller
@@ -365,7 +366,7 @@ else:
     horizon = pick(10.0, 0.3)
     r_h, v_h = sample_initial_state(cfg, pick(10, 2), torch.Generator().manual_seed(TEST_SEED))
     flyers = {"DAGNN": load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt"), "VGAI": load_controller(DATA_DIR / "vgai" / "vgai_F24.pt"),
-              "the paper's VGAI (one gray frame, notebook 06)": load_controller(DATA_DIR / "experiments" / "vgai_paper_seed0.pt"),
+              "the paper's VGAI (one gray frame, notebook 11)": load_controller(DATA_DIR / "experiments" / "vgai_paper_seed0.pt"),
               "Local": LocalController(cfg)}
     times = [t for t in (2.0, 5.0, 10.0) if t <= horizon] or [horizon]
     rows, spans = [], {}
@@ -380,6 +381,8 @@ else:
     def trend(first, last):
         if last < first / 10:
             return "keeps aligning (falls more than tenfold)"
+        if last > 1.0:  # relative speeds of a metre per second and more: not a floor, no alignment at all
+            return "never aligns (its drones still pass each other at metres per second)"
         return "levels off" if last < 2 * first else "drifts apart (rises more than twofold)"
 
     display(prose("Read off this run, from {t0:g} s to {t1:g} s: {text}.", t0=times[0], t1=times[-1], text="; ".join(
@@ -396,7 +399,7 @@ else:
 # orders of magnitude between 2, 5 and 10 s; one that levels off keeps a floor, the speed at which
 # its drones still drift past each other (the square root of the variance, in m/s): in the book's
 # runs even the DAGNN, which brakes every relative velocity it sees, levels off at a small floor,
-# the balance between its damping and its own imitation errors (notebook 06). Local
+# the balance between its damping and its own imitation errors (notebook 11, section 6). Local
 # aligns only within each group it splits into. Eq. 1 sums the variance over the 2-s episode, where
 # the first steps dominate, so two controllers with close costs can end with floors orders of
 # magnitude apart: a cost alone does not say whether a swarm flocked, which is why the book reports
@@ -464,6 +467,20 @@ def falls(trend):
 vgai_cells = [(t, c, cell(t, "VGAI", c)) for t in ("F", "K", "v_init", "R", "N") for c in TABLES[t]["columns"]
               if cell(t, "VGAI", c) and PAPER[t].get("VGAI", {}).get(c) is not None]
 below_paper = [x for t, c, x in vgai_cells if x["relative_cost_mean"] < PAPER[t]["VGAI"][c]]
+def cheaper_than_default():
+    """Which settings cost less than the paper's default (the last column, which the headline flies), by the rule."""
+    parts = []
+    for t, name in (("F", "F"), ("K", "K - 1")):
+        cols, cs = cells_of(t, "VGAI")
+        show = "{:g}".format  # the K table's columns are already K - 1
+        below = [show(c) for c, x in zip(cols[:-1], cs[:-1]) if findings.compare(x, cs[-1]) == -1]
+        if below:
+            parts.append(f"{name} = {' and '.join(below)} cost{'s' if len(below) == 1 else ''} less than "
+                         f"{name} = {show(cols[-1])}")
+    return ("The paper's defaults, which the book's headline flies, are not the cheapest settings: "
+            + "; ".join(parts) + ", beyond the intervals." if parts else "")
+
+
 F_trend = findings.trend(cells_of("F", "VGAI")[1], -1)
 K_trend = findings.trend(cells_of("K", "VGAI")[1], -1)
 d1, dr1, v1, l1 = (cell("R", r, 1.0) for r in ("DAGNN", "DAGNN (retrained)", "VGAI", "Local"))
@@ -475,9 +492,10 @@ n_l = [cell("N", "Local", c) for c in n_cols]
 bullets = [
     f"* **Our VGAI, with the book's sensor and recipe, is below the paper's printed VGAI** in {len(below_paper)} of "
     f"the {len(vgai_cells)} cells where the paper prints a VGAI number (not the same method: see the bullets below). "
-    "Its trends in F and K, from one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({falls(F_trend)}), K - 1 = 1, 2, 3 give "
-    f"{series('K', 'VGAI')} ({falls(K_trend)}); notebook 06's three training seeds of one configuration show how far "
-    "one training lands from the next.",
+    f"Its trends in F and K, from one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({falls(F_trend)}), K - 1 = 1, 2, 3 give "
+    f"{series('K', 'VGAI')} ({falls(K_trend)}); notebook 11's three training seeds of one configuration show how far "
+    "one training lands from the next. "
+    + cheaper_than_default(),
     f"* **At R = 1 m, VGAI (trained at 1.5 m) costs {v1['relative_cost_mean']:.2f}**, against the DAGNN's "
     f"{d1['relative_cost_mean']:.2f} flown there and {dr1['relative_cost_mean']:.2f} retrained there, and Local's "
     f"{l1['relative_cost_mean']:.2f}. "
@@ -520,8 +538,8 @@ display(Markdown("\n".join(bullets)))
 #   latency); imitation is easier when the expert's model is the world. At $R = 2$ m our DAGNN even
 #   scores below 1: the expert is a hand-designed potential field, not the minimiser of eq. 1.
 # * **Our VGAI is cheaper than the paper's too, but it is not the paper's VGAI.** Flown as the paper
-#   describes it (one gray frame, from random weights), ours learns nothing to act on at the book's
-#   budget (notebook 06); the departures notebook 06 measures are what separate the two.
+#   describes it (one gray frame, from random weights), ours does not align a swarm: one frame shows
+#   no motion (notebook 11); the departures notebook 11 measures are what separate the two.
 # * **The radius table.** Our rows DAGNN and VGAI are trained at $R = 1.5$ and flown at 1.0 and 2.0;
 #   the paper does not say whether it retrained, so the row *DAGNN (retrained)* trains one at each
 #   radius. The DAGNN follows the paper: a larger radius helps, flown or retrained, and retraining
@@ -534,9 +552,9 @@ display(Markdown("\n".join(bullets)))
 #   slow starts it does worse there than the default one (the line above). Our local heuristic's
 #   *relative* cost falls as $v_{init}$ grows: the expert's cost grows faster (the cell above).
 # * **Spread.** Differences smaller than the intervals are not evidence either way, in ours or (no
-#   spread reported) in the paper's. The DAGNN's spread over three training seeds is often larger
-#   than its interval over episodes, so one training per cell, as for our VGAI rows and the paper's,
-#   understates the uncertainty (notebook 06 flies three seeds of the book's VGAI).
+#   spread reported) in the paper's. An interval is over episodes only: one training per cell, as for
+#   our VGAI rows and the paper's, leaves out how far one training lands from the next (notebook 11
+#   flies three seeds of the book's VGAI beside one training's interval).
 # * **Scaling.** With the symmetric-normalised GSO what a drone aggregates stays on the same scale
 #   as its degree grows (notebook 03 shows the un-normalised GSO failing at 100); VGAI's images do
 #   not: more drones crowd each panorama.
@@ -545,7 +563,7 @@ display(Markdown("\n".join(bullets)))
 # **One DAGNN for every team and radius?** The authors' released training code draws the
 # communication radius per sample from $U(1.0, 3.5)$ m; ours trains at $R = 1.5$ m and $N = 50$.
 # `DAGNNTrainConfig(teams=..., radii=...)` flies each DAgger round's swarms in groups whose $N$ is
-# drawn from a list and $R$ from a range (the features of eq. 9 and the GSO follow each group's $R$;
+# drawn from a list and $R$ from a range (the local features of eq. 4 and the GSO follow each group's $R$;
 # the expert does not depend on it). Flown on validation episodes across the columns of Tables 2b
 # and 3 (`python tools/experiments/teams_and_radii.py`; a choice, so not on the test episodes):
 
@@ -562,7 +580,7 @@ team_cols = list(next(iter(team_recs.values())))
 
 
 def team_cell(x):
-    return (f"{x['relative_cost_mean']:.2f} · {x['velocity_variance_median']['5s']:.1e} · "
+    return (f"{x['relative_cost_mean']:.2f} · {variance_text(x['velocity_variance_median']['5s'])} · "
             f"{x['share_connected_at_end']:.0%} · {'flocked' if flocked(x) else 'no'}")
 
 
@@ -574,19 +592,25 @@ display(Markdown("| DAGNN trained over | " + " | ".join(c.replace("N=", "N' = ")
                    f"flocked; {next(iter(team_recs['both'].values()))['episodes']} validation episodes per cell."))
 shipped_t, both_t = team_recs["shipped (N = 50, R = 1.5 m)"], team_recs["both"]
 newly_flocked = [c for c in team_cols if flocked(both_t[c]) and not flocked(shipped_t[c])]
-lower = lambda c: "lower" if both_t[c]["relative_cost_mean"] < shipped_t[c]["relative_cost_mean"] else "not lower"
+def lower(c):  # by the book's one rule (intervals apart), not by the point estimates
+    return {-1: "below", 0: "level with (intervals overlap)", 1: "above"}[findings.compare(both_t[c], shipped_t[c])]
+
+
+
 prose("Drawing both in training makes the DAGNN flock where the shipped one does not in {newly}. At N' = 200 its "
       "variance at 5 s is {b200:.1e} m²/s² against the shipped one's {s200:.1e}, at R = 1 m {b1:.1e} against {s1:.1e} "
       "(connected at 5 s in {bc1:.0%} and {sc1:.0%} of episodes). Its costs at N' = 100 and 200 ({c100:.2f}, {c200:.2f}) "
-      "are {l100} and {l200} than the shipped one's ({d100:.2f}, {d200:.2f}): eq. 1 weighs the first second, the "
+      "are {lower}: eq. 1 weighs the first second, the "
       "flock the last ones.",
       newly=", ".join(c.replace("=", " = ") for c in newly_flocked) or "no column",
       b200=both_t["N=200"]["velocity_variance_median"]["5s"], s200=shipped_t["N=200"]["velocity_variance_median"]["5s"],
       b1=both_t["R=1.0"]["velocity_variance_median"]["5s"], s1=shipped_t["R=1.0"]["velocity_variance_median"]["5s"],
       bc1=both_t["R=1.0"]["share_connected_at_end"], sc1=shipped_t["R=1.0"]["share_connected_at_end"],
       c100=both_t["N=100"]["relative_cost_mean"], c200=both_t["N=200"]["relative_cost_mean"],
-      d100=shipped_t["N=100"]["relative_cost_mean"], d200=shipped_t["N=200"]["relative_cost_mean"],
-      l100=lower("N=100"), l200=lower("N=200"))
+      lower=(f"{lower('N=100')} the shipped one's ({shipped_t['N=100']['relative_cost_mean']:.2f}, "
+             f"{shipped_t['N=200']['relative_cost_mean']:.2f}) at both" if lower("N=100") == lower("N=200") else
+             f"{lower('N=100')} the shipped one's at N' = 100 ({shipped_t['N=100']['relative_cost_mean']:.2f}) and "
+             f"{lower('N=200')} it at 200 ({shipped_t['N=200']['relative_cost_mean']:.2f})"))
 
 # %%
 stab = json.loads((DATA_DIR / "experiments" / "expert_stability.json").read_text())["teams"]
@@ -619,15 +643,19 @@ yes = {True: "flocked", False: "did not flock"}
 below_3 = [(t, row, c, x) for t in TABLES for row, xs in results["tables"][t]["rows"].items() for c in TABLES[t]["columns"]
            if (x := xs.get(str(c))) and x["relative_cost_mean"] < 3 and "velocity_variance_median" in x]
 not_flocking = [(t, row, c, x) for t, row, c, x in below_3 if not flocked(x)]
+one_frame = json.loads((DATA_DIR / "experiments" / f"{LEAVE_ONE_OUT['the second frame'][0]}.json").read_text())
+cam_test = json.loads((DATA_DIR / "experiments" / "vgai_depthcam_test_cameras.json").read_text())["settings"]
+authors = f"noise{10 / 255:.4g}"
 prose("* **Two frames.** The paper's CNN takes one image per step; ours also takes a motion channel from the frame "
       "g steps earlier, so a drone measures its neighbours' relative velocities instead of inferring them (notebook 05 "
-      "measures the single-frame estimator beside the two-frame one).\n"
-      "* **Clean renders.** Our frames carry no sensor noise and no blur unless a notebook adds them; the authors fly "
-      "their VGAI with noise of 10/255 and a 5 × 5 blur. Notebook 08 flies ours through both, and the VGAI trained "
-      "through a camera model.\n"
+      "measures the single-frame estimator beside the two-frame one). Without the second frame the book's recipe costs "
+      "{of:.2f} on the validation episodes, variance at 5 s {ov:.1e} m²/s² ({oflock}; notebook 11).\n"
+      "* **Clean renders.** The shipped VGAI was trained on frames with no sensor noise and no blur; the authors fly "
+      "theirs with noise of 10/255 and a 5 × 5 blur. Trained through a camera model instead (notebook 08), the depth "
+      "camera VGAI costs {cc:.2f} on clean frames of the test episodes and {ca:.2f} at 10/255 ({cflock}).\n"
       "* **A depth channel.** The paper's cameras give images only; ours give each pixel's distance too. The book's "
       "recipe with the gray channel only costs {gc:.2f} and its velocity variance at 5 s is {gv:.1e} m²/s² ({gf}); "
-      "with depth {dc:.2f} and {dv:.1e} ({df}), on the same {ep} validation episodes (notebook 06, section 6). "
+      "with depth {dc:.2f} and {dv:.1e} ({df}), on the same {ep} validation episodes (notebook 11). "
       "{gverdict}\n"
       "* **Supervision on the exact features.** Stage 1 fits the CNN to the exact local features and stage 3 keeps "
       "a state-estimation loss beside eq. 10's (notebooks 05 and 06); the paper trains its CNN from the actions only.\n"
@@ -639,9 +667,12 @@ prose("* **Two frames.** The paper's CNN takes one image per step; ours also tak
       "learner flying alone costs {mc:.2f} on the test episodes and its velocity variance at 5 s is {mv:.1e} "
       "m²/s², {mx:.0f}× the book's threshold ({mf}); so do {nc} of the {nt} cells of the tables above that cost "
       "less than 3 ({cases}); notebook 09 lists every such case.",
+      of=one_frame["relative_cost_mean"], ov=one_frame["velocity_variance_median"]["5s"], oflock=yes[flocked(one_frame)],
+      cc=cam_test["clean"]["relative_cost_mean"], ca=cam_test[authors]["relative_cost_mean"],
+      cflock=("flocked in both" if flocked(cam_test["clean"]) and flocked(cam_test[authors]) else "not flocked in both"),
       gc=gray["relative_cost_mean"], gv=gray["velocity_variance_median"]["5s"], gf=yes[flocked(gray)],
       dc=depth["relative_cost_mean"], dv=depth["velocity_variance_median"]["5s"], df=yes[flocked(depth)],
-      ep=depth["episodes"], gverdict=("Without depth the recipe does not flock (notebook 06 leaves out each departure "
+      ep=depth["episodes"], gverdict=("Without depth the recipe does not flock (notebook 11 leaves out each departure "
                                       "in turn)." if not flocked(gray) else "Depth is not what makes it flock."), pl=pl, l3=l3, mc=mixture["relative_cost_mean"],
       mv=mixture["velocity_variance_median"]["5s"], mx=mixture["velocity_variance_median"]["5s"] / FLOCKED_VARIANCE,
       mf=yes[flocked(mixture)], nc=len(not_flocking), nt=len(below_3),

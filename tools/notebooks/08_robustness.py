@@ -127,14 +127,16 @@ for row, (label, ps) in enumerate(worlds.items()):
     world.t = 10
     images = camera_input(vgai.vision, cfg, r, r_before, world.camera if ps else None)[0, 0]  # drone 0: (4, H, W)
     motion_size[label] = images[2].abs().mean().item()
-    axes[row, 0].imshow(images[0], cmap="gray", vmin=0, vmax=1, aspect="auto")
-    axes[row, 1].imshow(images[2], cmap="RdBu", vmin=-1, vmax=1, aspect="auto")
+    im_gray = axes[row, 0].imshow(images[0], cmap="gray", vmin=0, vmax=1, aspect="auto")
+    im_motion = axes[row, 1].imshow(images[2], cmap="RdBu", vmin=-1, vmax=1, aspect="auto")
     axes[row, 0].set_ylabel(label, rotation=0, ha="right", va="center")
     for ax in axes[row]:
         ax.set_xticks([]), ax.set_yticks([])
 axes[0, 0].set_title("gray channel I(t): front, right, back, left cameras")
 axes[0, 1].set_title(f"motion channel {vgai.vision.motion_scale:g} (I(t) - I(t-{vgai.vision.motion_gap}))")
 plt.tight_layout()
+fig.colorbar(im_gray, ax=axes[:, 0], fraction=0.03, pad=0.01, label="intensity (0 black, 1 white)")
+fig.colorbar(im_motion, ax=axes[:, 1], fraction=0.03, pad=0.01, label="scaled change of intensity")
 plt.show()
 
 # %%
@@ -248,7 +250,7 @@ display(Markdown("| controller | perturbation | relative cost (95% CI) | varianc
 # %% [markdown]
 # ## 4. The targets, checked
 #
-# Two targets for VGAI, set before the sweep was run: with a fifth of its messages lost it should
+# Two targets for VGAI: with a fifth of its messages lost it should
 # stay below the Local heuristic's cost and keep the swarm connected in nine episodes of ten or
 # more; with pixel noise of 0.05 its cost should stay within a fifth of its clean cost.
 
@@ -397,7 +399,7 @@ for width, runs_ in CAMERA_TRAININGS.items():
                  f"{rg.offset[1]:g}], a dead camera on {rg.dead_share:.0%} of the drones, the depth channel's range "
                  f"error up to {rg.depth_noise[1]:.0%} of the distance; trainings of "
                  + " and ".join(f"{training_minutes(cam_train[n]):.0f} min ({how_trained(cam_train[n])})" for n in names))
-chosen = chosen_camera_runs()  # the lowest clean cost on these validation episodes, per sensor
+chosen = chosen_camera_runs()  # per sensor, runs.SEED_RULE on clean frames of these validation episodes
 label_of = {name: label for label, name in CAMERA_RUNS.items()}
 depth_label, gray_label = label_of[chosen["gray + depth"]], label_of[chosen["gray only"]]
 depth, gray = cam_eval[depth_label], cam_eval[gray_label]
@@ -467,7 +469,7 @@ display(prose("On the test episodes the gray-only VGAI costs {c:.2f} on clean fr
 # **The depth camera from three training seeds.** One training says little about a recipe: the depth
 # camera's recipe (the narrower ranges, gray + depth) trained from seeds 0, 1 and 2 (`vgai_variant.py
 # --seed S`), each judged on clean frames of the same validation episodes, beside the book's clean
-# recipe from its own three seeds (notebook 06). Two recipes differ only when their intervals over
+# recipe from its own three seeds (notebook 11). Two recipes differ only when their intervals over
 # seeds, mean ± 1.96 × spread / √seeds (`findings`), do not overlap.
 
 # %%
@@ -533,11 +535,11 @@ prose("Of the three seeds, {a} flock at the authors' noise and {b} at their blur
 
 # %% [markdown]
 # **What limits it: does the CNN still read the velocities?** The controller needs the relative
-# velocities most (notebook 06), and they live in the motion channel, the difference of two frames
+# velocities most (notebook 11), and they live in the motion channel, the difference of two frames
 # g steps apart: their noise adds, while a neighbour moves a fraction of a column in g steps. Each
 # VGAI's state-estimation head (kept by the book's recipe) is read on expert flights from the
 # validation initial conditions, through sensor noise of each σ: the correlation of its estimate of
-# the velocity sums of eq. 9 with the exact ones, early in the flight, when the drones still move
+# the velocity sums of the local features (eq. 4's rows) with the exact ones, early in the flight, when the drones still move
 # relative to each other (`python tools/experiments/estimator_under_noise.py`).
 
 # %%
@@ -549,7 +551,7 @@ display(Markdown(f"| VGAI (channels) | " + " | ".join(f"σ = {float(x):.3g}" for
                      f"| {name.split('/')[-1]} ({' + '.join(e['channels'])}) | " + " | ".join(
                          "{:.2f}".format(sum(e["correlation"][x][str(t_read)][:2]) / 2) for x in sigmas) + " |"
                      for name, e in est["checkpoints"].items())
-                 + f"\n\nCorrelation of the estimated velocity sums (eq. 9, mean of x and y) with the exact ones at step "
+                 + f"\n\nCorrelation of the estimated velocity sums (the local features of eq. 4, mean of x and y) with the exact ones at step "
                    f"{t_read}; {est['provenance']['episodes']} validation flights of the expert."))
 
 # %% [markdown]

@@ -24,7 +24,8 @@ from vgai_lite.evaluate import as_safe_as_expert, flocked
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.lab.reproduce import load_results
 from vgai_lite.lab.findings import compare, needs
-from vgai_lite.lab.runs import LEAVE_ONE_OUT, DAGNN_RUNS, PAPER_SEEDS, VGAI_RUNS, chosen_camera_runs, training_minutes
+from vgai_lite.lab.runs import (LEAVE_ONE_OUT, DAGNN_RUNS, PAPER_SEEDS, VGAI_RUNS, chosen_camera_runs, how_trained,
+                                 training_minutes)
 from vgai_lite.vgai_config import PAPER as PAPER_T
 
 
@@ -85,7 +86,7 @@ paper_costs = [test[f"vgai_paper_seed{s}"]["relative_cost_mean"] for s in PAPER_
 display(prose("On these episodes the DAGNN is {dv} VGAI and VGAI is {vl} the local heuristic (the paper: DAGNN < VGAI < Local), "
       "at lower costs than the paper's: VGAI {vc:.2f} against the paper's {vp:.2f}, the DAGNN {dc:.2f} against {dp:.2f}. "
       "{flock} The paper's VGAI as the paper describes it, trained at the book's budget, costs {plo:.2f} to {phi:.2f} "
-      "over three training seeds and flocks in {pfl} of them (notebook 06 sets it beside a swarm that does nothing), so "
+      "over three training seeds and flocks in {pfl} of them (notebook 11 sets it beside a swarm that does nothing), so "
       "the book's VGAI is the paper's method with the book's departures, not the paper's VGAI reproduced.",
       pfl=sum(flocked(test[f"vgai_paper_seed{s}"]) for s in PAPER_SEEDS),
       dv=order[compare(d, v)], vl=order[compare(v, l)],
@@ -98,7 +99,12 @@ display(prose("On these episodes the DAGNN is {dv} VGAI and VGAI is {vl} the loc
 display(prose("The paper's central claim is that the CNN and the GNN trained together beat a pipeline of parts trained "
               "apart. The modular vision pilot is that pipeline: the same kind of CNN trained alone to estimate the six "
               "local features, feeding the DAGNN's network. It costs {pc:.2f} ({plo:.2f}-{phi:.2f}) and {pfl} (variance "
-              "at 5 s {pv:.1e} m²/s²); VGAI, trained end to end, costs {vc:.2f} and is {order} it: {verdict}.",
+              "at 5 s {pv:.1e} m²/s²); VGAI, trained end to end, costs {vc:.2f} (variance at 5 s {vv:.1e}) and is {order} it: "
+              "{verdict}. {tighter}",
+              vv=v["velocity_variance_median"]["5s"],
+              tighter=("The pipeline's swarm settles tighter than VGAI's, so on the flock itself the paper's claim does not "
+                       "hold here." if pil["velocity_variance_median"]["5s"] < v["velocity_variance_median"]["5s"] else
+                       "VGAI's swarm also settles tighter than the pipeline's."),
               pc=pil["relative_cost_mean"], plo=pil["relative_cost_mean_ci95"][0], phi=pil["relative_cost_mean_ci95"][1],
               pfl="flocks" if flocked(pil) else "does not flock", pv=pil["velocity_variance_median"]["5s"],
               vc=v["relative_cost_mean"], order=order[compare(v, pil)],
@@ -119,8 +125,8 @@ candidates = [(f"test episodes: {n}", r) for n, r in test.items()]
 candidates += [(f"record: dagnn/{p.stem}", json.loads(p.read_text())) for p in sorted((DATA_DIR / "dagnn").glob("dagnn_K*.json"))]
 results = load_results()
 tables_seed = results["provenance"]["reproduce_config"]["seed"]
-tables_note = ("" if tables_seed == TEST_SEED else
-               f" (the tables' cells: seed {tables_seed}, with the VGAIs shipped before the book's recipe; not yet recomputed)")
+assert tables_seed == TEST_SEED, (f"the tables' cells are on seed {tables_seed}, not the test episodes: "
+                                  "`python -m vgai_lite reproduce` recomputes them")
 for table, t in results["tables"].items():
     for row, cells in t["rows"].items():
         for col, c in cells.items():
@@ -134,7 +140,7 @@ for label, rec in candidates:
             counter.append(f"| {label} | {rec['relative_cost_mean']:.2f} | {var['5s']:.1e} | {rec['share_connected_at_end']:.0%} |")
 display(Markdown("| where | relative cost | variance at 5 s [m²/s²] | connected at 5 s |\n|---|---|---|---|\n"
                  + "\n".join(counter) + f"\n\nTest records: {test['vgai_F24']['episodes']} episodes of seed "
-                 f"{test['vgai_F24']['seed']}; dagnn records: the working episodes (seed 2020, notebook 01){tables_note}."))
+                 f"{test['vgai_F24']['seed']}; dagnn records: the working episodes (seed 2020, notebook 01)."))
 prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than 3 and do not flock: a relative cost "
                             "below 3 does not mean a flock, because eq. 1 is spent in the first second, while the "
                             "drones brake hard, and says little about whether they end up moving as one."
@@ -146,10 +152,10 @@ prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than
 # **What favours our numbers.**
 #
 # * **Depth.** Our drones see a gray channel *and* a depth channel; the paper's cameras give images
-#   only. Trained without depth, the book's recipe does not flock (notebook 06, section 6; below).
+#   only. Trained without depth, the book's recipe does not flock (notebook 11; below).
 # * **Two frames.** Our CNN sees each frame beside its difference with the frame 5 steps earlier;
 #   the paper's takes one frame, which shows where the neighbours are but not how they move
-#   (notebook 05, section 3). The paper's VGAI with its one frame is measured in notebook 06.
+#   (notebook 05, section 3). The paper's VGAI with its one frame is measured in notebook 11.
 # * **Clean frames.** The book's headline VGAI is trained and flown on noiseless renders; notebook 08
 #   trains the same recipe through a camera model, and section 4 below says what it costs there.
 # * **Supervision on the exact features.** Stages 1 and 3 of the book's training regress the six
@@ -177,7 +183,7 @@ one = load("experiments/vgai_book_one_frame.json")
 display(prose("The second frame, measured the same way: with one frame per step (no motion channel) the book's recipe "
               "ends at {o5:.1e} m²/s² at 5 s (flocked: {of}), at a cost of {oc:.2f}.", o5=one["velocity_variance_median"]["5s"],
               of="yes" if flocked(one) else "no", oc=one["relative_cost_mean"]))
-display(prose("What VGAI's flocking needs, by notebook 06's leave-one-out (validation episodes): {s}", s=needs(
+display(prose("What VGAI's flocking needs, by notebook 11's leave-one-out (validation episodes): {s}", s=needs(
     {d: load(f"experiments/{name}.json") for d, (name, _) in LEAVE_ONE_OUT.items()})))
 
 # %% [markdown]
@@ -196,6 +202,7 @@ from vgai_lite.lab import robustness
 
 rob = robustness.load()
 rob_current = robustness.find(rob, "VGAI").get("checkpoint") == robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"])
+assert rob_current, "the robustness sweep flew another VGAI: `python -m vgai_lite reproduce --only robustness`"
 noisy = robustness.find(rob, "VGAI", (("image_noise", robustness.TARGETS["image_noise_sigma"]),))
 cams = {sensor: load(f"experiments/{name}_cameras.json")["settings"] for sensor, name in chosen_camera_runs().items()}
 authors = f"noise{10 / 255:.4g}"
@@ -222,13 +229,13 @@ items = [
                                    f"{n_vgai[c]['expert_share_below_0.05m']:.0%}; median closest approach "
                                    f"{n_vgai[c]['median_min_distance'] / n_vgai[c]['expert_median_min_distance']:.2f}× "
                                    "the expert's)" for c in unsafe))
-    + f" (Table 3, notebook 07{tables_note}). More drones crowd each panorama, and no training saw more than 50. "
+    + " (Table 3, notebook 07). More drones crowd each panorama, and no training saw more than 50. "
     f"At N' = 200 the teacher itself does not flock: the expert of eq. 2, sampled at Ts = {expert_200['Ts']:g} s, "
     f"multiplies each velocity deviation by 1 − N Ts = {expert_200['predicted_factor']:+.0f} per step, and its variance "
     f"at 5 s is {expert_200['expert']['velocity_variance_median']['5s']:.1e} m²/s² "
     f"(`data/experiments/expert_stability.json`, notebook 03).",
     f"* **Noisy cameras.** With pixel noise of sigma {robustness.TARGETS['image_noise_sigma']:g} the "
-    + ("book's VGAI" if rob_current else "earlier VGAI (the robustness sweep is not yet recomputed for the shipped one)")
+    + "book's VGAI"
     + f" costs {noisy['relative_cost_mean']:.2f}: its motion channels, a difference of two frames, drown (notebook 08). "
     "Trained through the camera from the start, the depth camera costs "
     f"{cams['gray + depth']['clean']['relative_cost_mean']:.2f} on clean frames and "
@@ -242,7 +249,8 @@ items = [
        else "The noise still costs them more than a quarter of their clean cost")
     + ("." if cam_flocked == 4 else "; flocking through a camera's noise is still open."),
     f"* **Training time.** The book's recipe took {min(seed_minutes):.0f} to {max(seed_minutes):.0f} minutes per "
-    "training seed on two cores, each beside another training at one thread; the two VGAIs of Table 2b's extra row, "
+    "training seed (" + "; ".join(sorted({how_trained(load(f"vgai/seeds/{n}.json")) or "before provenance" for n in choice["candidates"]}))
+    + "); the two VGAIs of Table 2b's extra row, "
     "trained at two threads by `reproduce --extras --threads 2`, took " + " and ".join(
         f"{load(f'results/cells/{key}.json')['train_seconds_recorded'] / 60:.0f}"
         for key in (results["tables"]["R"]["rows"]["VGAI (retrained)"][c]["cells"][0] for c in ("1.0", "2.0")))

@@ -20,7 +20,8 @@ results = load_results()  # the committed full run: data/results/results.json
 # %% [markdown]
 # ## Past one machine
 #
-# A full reproduction with three training seeds per VGAI row is many hours on a laptop. The same
+# A full reproduction with three training seeds per VGAI row takes the hours projected below on one
+# laptop. The same
 # command runs its trainings and cells as [Ray](https://docs.ray.io) tasks (`vgai_lite/lab/ray_runner.py`):
 #
 # ```bash
@@ -45,8 +46,8 @@ results = load_results()  # the committed full run: data/results/results.json
 # each cell's evaluation time), with three training seeds per VGAI row. The projection is the larger
 # of the work spread evenly over the machines and the longest chain that must run in order (the three
 # VGAIs of Table 1b that share a first stage, then the slowest cell); it ignores Ray's own overhead
-# and assumes every machine is this one. Some of the recorded VGAI trainings ran beside another job
-# with one thread (README, training times), so the projection errs on the slow side.
+# and assumes every machine is this one. Each training's time is the one its record holds (how it ran
+# is in the record's provenance), so the projection is as good as those records.
 
 # %%
 from vgai_lite.lab.ray_runner import projected_hours

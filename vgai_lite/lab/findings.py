@@ -89,10 +89,19 @@ def needs(without: dict) -> str:
     return f"VGAI still flocks without {listed(spare)}; it does not flock without {listed(needed)}."
 
 
+def steps_text(cells: Sequence[dict], labels: Sequence) -> str:
+    """Each step of a series by the criterion: '1 → 2 lower, 2 → 3 within the intervals'."""
+    word = {-1: "lower", 0: "within the intervals", 1: "higher"}
+    return ", ".join(f"{la} → {lb} {word[compare(b, a)]}"
+                     for (la, a), (lb, b) in zip(zip(labels, cells), zip(labels[1:], cells[1:])))
+
+
 def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) -> str:
     """The finding as a sentence generated from the data: the claim, the verdict by the criterion
-    and the numbers behind it."""
+    and the numbers behind it; where the verdict is not HOLDS over more than one step, each step's
+    own verdict (a clear first step is not hidden by a later one within its intervals)."""
     how = {HOLDS: "holds in ours: every step is larger than its intervals",
            CONTRADICTED: "does not hold in ours: some step goes the other way by more than its intervals",
            CANNOT_TELL: "cannot be told from ours: at least one step is within its intervals"}[verdict]
-    return f"{claim}: {how} ({series_text(cells, labels)})."
+    steps = f"; step by step, {steps_text(cells, labels)}" if verdict != HOLDS and len(cells) > 2 else ""
+    return f"{claim}: {how} ({series_text(cells, labels)}{steps})."

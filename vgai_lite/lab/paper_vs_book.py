@@ -38,7 +38,7 @@ def _rows() -> dict:
             "none: RGB cameras, distances only from how large and where a drone appears",
             ("a depth channel beside the gray one, so distances are read, not inferred"
              if "depth" in rc.channels else "none: the gray channel only, as the paper's cameras"),
-            "a help the paper's drones lack; notebook 06 trains the book's best recipe with gray only and "
+            "a help the paper's drones lack; notebook 11 trains the book's best recipe with gray only and "
             "says what depth buys"),
         "motion": (
             "one frame per step (the CNN sees no motion within one input)",
@@ -50,15 +50,16 @@ def _rows() -> dict:
             "residual blocks and two fully connected layers, average pooling along the vertical axis only",
             f"the same shape: stem, 4 residual blocks ({tv.cnn_widths[0]} and {tv.cnn_widths[1]} channels), "
             f"fc {tv.cnn_hidden} → F; F/3 of the features odd in the motion channels (`motion_features`)",
-            "the odd features read exactly 0 when nothing moves; notebook 06, section 6 measures each departure"),
+            "the odd features read exactly 0 when nothing moves; notebook 11 measures each departure"),
         "training": (
             "CNN and MLP end to end by K-step BPTT, imitation (L1), Adam 1e-3, DAgger with p = 0.33",
             f"the same, after two warm starts: (1) visual state estimation, the CNN regresses the DAGNN's "
             f"6 exact features ({tv.warm_steps} steps, half of the states with synthetic relative "
             f"velocities), (2) the MLP on the frozen CNN; then {tv.dagger_rounds} DAgger rounds of joint BPTT "
             f"with the state-estimation loss kept (weight {tv.aux_weight:g})",
-            "the book's addition: from random weights, at the book's budget, the paper's end-to-end imitation "
-            "found nothing to act on (notebook 06, section 6); notebooks 05-06"),
+            "the book's addition: without it the book's recipe does not flock (notebook 11's leave-one-out); "
+            "the paper's VGAI fails for its sensor (one gray frame), not for want of warm starts (notebook "
+            "11's square); notebooks 05, 06 and 11"),
         "GSO": (
             "S(t) respects the graph's sparsity (adjacency, Laplacian or normalisations cited); which one "
             "is not said (the public reference code averages)",

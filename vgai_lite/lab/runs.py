@@ -67,9 +67,9 @@ VGAI_RUNS: dict[str, VGAITrainConfig] = {
 PLAIN_RUNS: dict[str, VGAITrainConfig] = {
     f"{name}_plain": VGAITrainConfig(F=t.F, K=t.K, **BOOK_SENSOR) for name, t in VGAI_RUNS.items() if t.motion_features}
 """The book's configurations trained with the paper's loss, CNN and DAgger on the book's sensor after
-its warm starts (``BOOK_SENSOR``; "the paper's recipe" of notebook 06's first ablation, before the
+its warm starts (``BOOK_SENSOR``; "the paper's recipe" of notebook 11's first ablation, before the
 paper's VGAI itself was flown): their records (and vgai_F24_plain's checkpoint) are kept in
-data/experiments/, for notebook 06's table and notebook 07's two trainings of one configuration."""
+data/experiments/, for notebook 11's table and notebook 07's two trainings of one configuration."""
 
 LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {
     "the learner flying alone": ("vgai_F24_validation", "DAgger's mixture only"),
@@ -81,7 +81,7 @@ LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {
     "the state-estimation loss in stage 3": ("vgai_book_no_aux", "eq. 10 alone in the joint training"),
 }
 """The book's recipe without one of its departures from the paper at a time (training seed 0,
-validation episodes): departure -> (data/experiments/NAME.json, what is left). Notebook 06's
+validation episodes): departure -> (data/experiments/NAME.json, what is left). Notebook 11's
 leave-one-out table and the book's one sentence on what VGAI's flocking needs (``findings.needs``)."""
 
 PAPER_SEEDS = (0, 1, 2)
@@ -152,12 +152,15 @@ def training_minutes(record: dict) -> float:
 
 
 def how_trained(record: dict) -> Optional[str]:
-    """How a training ran, from its record's provenance ("1 thread, load 2.4": torch threads and the
-    machine's mean load average while it trained), or None for a record written before provenance."""
+    """How a training ran, from its record's provenance: its torch threads, and "alone" when the
+    machine's mean load average while it trained stayed within half a job of those threads, else
+    "sharing the cores" (e.g. "1 thread, sharing the cores": one of two trainings side by side). None
+    for a record written before provenance. The load itself stays in the record."""
     p = record.get("provenance", {}).get("training")
     if p is None:
         return None
-    return f"{p['torch_threads']} thread{'s' if p['torch_threads'] > 1 else ''}, load {p['load_average_mean']:.1f}"
+    n = p["torch_threads"]
+    return f"{n} thread{'s' if n > 1 else ''}, {'alone' if p['load_average_mean'] <= n + 0.5 else 'sharing the cores'}"
 
 
 def _check_name(name: str, runs: dict, kind: str) -> None:
