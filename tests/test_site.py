@@ -159,9 +159,11 @@ RAW_LATEX = ("$$", "\\mathbf", "\\frac", "\\tag{", "\\begin{", "\\sum", "\\mathc
 
 
 def _plain(text: str) -> str:
+    """Whitespace collapsed and typographic ligatures undone (a PDF's text layer writes "ﬂ" for "fl")."""
     import re
+    import unicodedata
 
-    return re.sub(r"\s+", " ", text).strip()
+    return re.sub(r"\s+", " ", unicodedata.normalize("NFKC", text)).strip()
 
 
 def test_the_book_prints_as_one_pdf_with_every_chapter_where_its_contents_say(site, tmp_path):
