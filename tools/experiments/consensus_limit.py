@@ -43,7 +43,10 @@ from vgai_lite.lab.provenance import Provenance, repo_relative, sha256  # noqa: 
 VGAIS = {"VGAI without the learner flying alone (DAgger's mixture only), training seed 0": "experiments/vgai_F24_mixture.pt",
          "VGAI, ablation row 1 (the paper's CNN, loss and mixture; the book's sensor and warm starts)":
              "experiments/vgai_F24_plain.pt",
-         "the paper's VGAI (one gray frame), training seed 0": "experiments/vgai_paper_seed0.pt"}
+         "the paper's VGAI (one gray frame), training seed 0": "experiments/vgai_paper_seed0.pt",
+         "VGAI through the camera, gray + depth (vgai_depthcam), training seed 0": "experiments/vgai_depthcam.pt",
+         "VGAI through the camera, gray only (vgai_camera_narrow_gray), training seed 0":
+             "experiments/vgai_camera_narrow_gray.pt"}
 """The VGAIs flown beside the book's recipe (its three training seeds, data/vgai/seeds/), by label."""
 from vgai_lite.flocking import velocity_variance  # noqa: E402
 

@@ -30,7 +30,7 @@ import torch
 from IPython.display import Markdown, display
 
 from vgai_lite import ExpertController, FlockConfig, LocalController, load_controller, rollout, sample_initial_state
-from vgai_lite.book import DATA_DIR, WORKING_SEED, QUICK, pick, prose
+from vgai_lite.book import DATA_DIR, TEST_SEED, WORKING_SEED, QUICK, pick, prose
 from vgai_lite.config import DISTANCE_FLOOR
 from vgai_lite.controllers import expert_control
 from vgai_lite.flocking import NonFiniteStateError
@@ -305,7 +305,7 @@ ax.axhline(local["relative_cost_mean"], color=PALETTE["Local"], ls="--", label="
 ax.set_xlabel("pixel noise sigma (gray channel)"), ax.set_ylabel("relative cost"), ax.legend()
 plt.tight_layout()
 plt.show()
-from vgai_lite.evaluate import FLOCKED_VARIANCE, flocked
+from vgai_lite.evaluate import FLOCKED_VARIANCE, flocked, variance_text
 from vgai_lite.lab import findings
 from vgai_lite.lab.runs import how_trained
 
@@ -534,6 +534,35 @@ prose("Of the three seeds, {a} flock at the authors' noise and {b} at their blur
       g=count("blur2.8", apart_ok), h=count("dead", apart_ok), u=count("dead", lambda c: not c["safe"]))
 
 # %% [markdown]
+# **The depth camera's targets on the test episodes.** The targets are stated for the test episodes,
+# which no choice has seen: the depth camera chosen above (training seed 0) flown once through every
+# camera of the targets, 50 episodes each (`camera_eval.py --seed 5000`).
+
+# %%
+dt = json.loads((exp_dir / f"{chosen['gray + depth']}_test_cameras.json").read_text())["settings"]
+assert {c["seed"] for c in dt.values()} == {TEST_SEED}, "the test episodes only"
+display(Markdown("| setting | test episodes |\n|---|---|\n" + "\n".join(f"| {k} | {cam_cell(dt[k])} |" for k in target_keys)
+                 + f"\n\nEach cell: relative cost (95% CI) · variance at 5 s [m²/s²] · connected at 5 s · flocked; "
+                   f"{dt['clean']['episodes']} test episodes (seed {dt['clean']['seed']})."))
+misses = [k for k in ("noise0.1", "blur2.8", "dead") if not apart_ok(dt[k])]
+prose("On the test episodes the depth camera costs {cc:.2f} on clean frames ({cf}); at the authors' noise {an:.2f} and "
+      "blur {ab:.2f} ({a12}: flocked, as safe as the expert and within 1.25× the clean cost); at σ = 0.05 and blur 1.4° "
+      "{a34} (variance at 5 s {v3} and {v4} m²/s²); at σ = 0.1, blur 2.8° and with a dead camera it {a5}{unsafe}.",
+      cc=dt["clean"]["relative_cost_mean"], cf="flocked" if dt["clean"]["flocked"] else "not flocked",
+      an=dt[authors]["relative_cost_mean"], ab=dt["blur0.5"]["relative_cost_mean"],
+      a12=ok(all(dt[k]["flocked"] and dt[k]["safe"] and dt[k]["relative_cost_mean"] <= 1.25 * dt["clean"]["relative_cost_mean"]
+                 for k in (authors, "blur0.5"))),
+      a34=ok(dt["noise0.05"]["flocked"] and dt["blur1.4"]["flocked"]),
+      v3=variance_text(dt["noise0.05"]["velocity_variance_median"]["5s"]),
+      v4=variance_text(dt["blur1.4"]["velocity_variance_median"]["5s"]),
+      a5=("stays connected in nine episodes of ten and below the local heuristic (met)" if not misses else
+          "misses the target (connected ≥ 90% and below the local heuristic) with " + ", ".join(
+              f"{k}: {dt[k]['share_connected_at_end']:.0%} connected, {dt[k]['relative_cost_mean']:.2f}" for k in misses)),
+      unsafe=("; it is less safe than the expert with " + ", ".join({"dead": "a dead camera"}.get(k, k) for k in target_keys
+                                                                     if not dt[k]["safe"])
+              if any(not dt[k]["safe"] for k in target_keys) else ""))
+
+# %% [markdown]
 # **What limits it: does the CNN still read the velocities?** The controller needs the relative
 # velocities most (notebook 11), and they live in the motion channel, the difference of two frames
 # g steps apart: their noise adds, while a neighbour moves a fraction of a column in g steps. Each
@@ -553,6 +582,30 @@ display(Markdown(f"| VGAI (channels) | " + " | ".join(f"σ = {float(x):.3g}" for
                      for name, e in est["checkpoints"].items())
                  + f"\n\nCorrelation of the estimated velocity sums (the local features of eq. 4, mean of x and y) with the exact ones at step "
                    f"{t_read}; {est['provenance']['episodes']} validation flights of the expert."))
+
+# %% [markdown]
+# The gray-only camera reads the velocity sums about as well as the depth camera does, so what keeps
+# its swarm from settling is not the estimate alone. The consensus measurement of notebook 11,
+# section 6 (`tools/experiments/consensus_limit.py`) asks each of them how hard it brakes a velocity
+# disagreement it sees (the damping gain γ) and how hard it pushes drones apart when they already
+# agree (the forcing at rest f), on clean frames of the working episodes:
+
+# %%
+limit = json.loads((DATA_DIR / "experiments" / "consensus_limit.json").read_text())["controllers"]
+cam_limit = {sensor: next(v["5s"] for k, v in limit.items() if f"({name})" in k) for sensor, name in chosen.items()}
+gd, gg = cam_limit["gray + depth"], cam_limit["gray only"]
+display(prose("At 5 s the depth camera brakes with γ = {dg:.1f} /s against a forcing at rest of {df:.3f} m/s² (variance "
+              "{dv} m²/s²); the gray-only camera with γ = {gg_:.1f} /s against {gf:.3f} m/s² (variance {gv} m²/s²). "
+              "{why}",
+              dg=gd["damping_gain_median"], df=gd["forcing_at_rest_rms_median"],
+              dv=variance_text(gd["velocity_variance_median"]), gg_=gg["damping_gain_median"],
+              gf=gg["forcing_at_rest_rms_median"], gv=variance_text(gg["velocity_variance_median"]),
+              why={(True, False): "Without depth it pushes harder at rest and brakes as hard (within a factor of 1.5).",
+                   (False, True): "Without depth it brakes more weakly and pushes as hard (within a factor of 1.5).",
+                   (True, True): "Without depth it both brakes more weakly and pushes harder at rest.",
+                   (False, False): "Neither figure differs by more than a factor of 1.5: what limits it lies elsewhere."}[
+                  (gg["forcing_at_rest_rms_median"] > 1.5 * gd["forcing_at_rest_rms_median"],
+                   gg["damping_gain_median"] < gd["damping_gain_median"] / 1.5)]))
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world
