@@ -269,17 +269,20 @@ display(Markdown("| the DAGNN's MLP flown with | variance at 0.5 s | 1 s | 2 s |
 fl = loop["flights"]
 noisy = {k: v for k, v in fl.items() if "white noise" in k}
 biased = next(v for k, v in fl.items() if "plain CNN" in k)
+
+
+def flight_flock(v):
+    """A flight of the record read by the book's one definition (evaluate.flocked)."""
+    return "flocked" if flocked({"velocity_variance_median": v["median_velocity_variance"], "flocking_horizon_s": 5.0,
+                                 "share_connected_at_end": v["share_connected_at_end"]}) else "not flocked"
+
+
 display(prose("White noise of σ = {sig} on the velocity features leaves the DAGNN at a variance at 5 s of {nv} m²/s² "
-      "({nf}); the plain CNN's estimate leaves it at {bv} ({bf}).",
-      sig=" and ".join(k.split("sigma = ")[1].split()[0] for k in noisy),
-      nv=" and ".join(variance_text(v["median_velocity_variance"]["5s"]) for v in noisy.values()),
-      nf=", ".join("flocked" if flocked({"velocity_variance_median": v["median_velocity_variance"],
-                                          "share_connected_at_end": v["share_connected_at_end"],
-                                          "flocking_horizon_s": 5.0}) else "not flocked" for v in noisy.values()),
-      bv=variance_text(biased["median_velocity_variance"]["5s"]),
-      bf="flocked" if flocked({"velocity_variance_median": biased["median_velocity_variance"],
-                               "share_connected_at_end": biased["share_connected_at_end"],
-                               "flocking_horizon_s": 5.0}) else "not flocked"))
+              "({nf}); the plain CNN's estimate leaves it at {bv} ({bf}).",
+              sig=" and ".join(k.split("sigma = ")[1].split()[0] for k in noisy),
+              nv=" and ".join(variance_text(v["median_velocity_variance"]["5s"]) for v in noisy.values()),
+              nf=", ".join(flight_flock(v) for v in noisy.values()),
+              bv=variance_text(biased["median_velocity_variance"]["5s"]), bf=flight_flock(biased)))
 rest = loop["bias_at_rest"]
 plain_name, odd_name = list(rest)
 prose("Along expert flights at step {step}, where the swarm is aligned and the true velocity features are {true:.0e} "
