@@ -100,6 +100,21 @@ CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthca
 data/experiments/NAME.json, each judged on the validation episodes (notebook 08, its seed spread)."""
 
 
+SEED_RULE = "among the seeds that flocked on the validation episodes, the lowest relative cost (all seeds if none flocked)"
+"""How the book's vgai_F24 is chosen among its training seeds (``pick_seed``): a user wants a swarm that
+flocks first and a low cost second, so a cheaper training whose swarm does not settle (``evaluate.flocked``)
+is not the one shipped."""
+
+
+def pick_seed(candidates: dict) -> str:
+    """SEED_RULE: ``candidates`` maps a name to its validation summary ("relative_cost_mean", "flocked");
+    returns the chosen name."""
+    if not candidates:
+        raise ValueError("pick_seed needs at least one candidate training")
+    pool = [n for n in candidates if candidates[n]["flocked"]] or list(candidates)
+    return min(pool, key=lambda n: candidates[n]["relative_cost_mean"])
+
+
 def chosen_camera_runs(folder: Optional[Path] = None) -> dict[str, str]:
     """For each sensor of CAMERA_RUNS, the camera training that SEED_RULE (``pick_seed``, the book's one
     rule for such choices) picks on clean frames of the validation episodes (``camera_eval``'s record,
@@ -229,21 +244,6 @@ def book_estimator(name: str, retrain: bool = False, steps: int = 3000, progress
             "quality": {str(t): q for t, q in quality.items()}}
     save_estimator(path, cnn, vision, meta)
     return cnn, vision, meta
-
-
-SEED_RULE = "among the seeds that flocked on the validation episodes, the lowest relative cost (all seeds if none flocked)"
-"""How the book's vgai_F24 is chosen among its training seeds (``pick_seed``): a user wants a swarm that
-flocks first and a low cost second, so a cheaper training whose swarm does not settle (``evaluate.flocked``)
-is not the one shipped."""
-
-
-def pick_seed(candidates: dict) -> str:
-    """SEED_RULE: ``candidates`` maps a name to its validation summary ("relative_cost_mean", "flocked");
-    returns the chosen name."""
-    if not candidates:
-        raise ValueError("pick_seed needs at least one candidate training")
-    pool = [n for n in candidates if candidates[n]["flocked"]] or list(candidates)
-    return min(pool, key=lambda n: candidates[n]["relative_cost_mean"])
 
 
 def choose_seed() -> dict:
