@@ -21,6 +21,7 @@ from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # n
 from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.lab.reproduce import PAPER  # noqa: E402
 from vgai_lite.lab.runs import PAPER_SEEDS, chosen_camera_runs, how_trained, training_minutes  # noqa: E402
+from vgai_lite.vgai_config import VGAITrainConfig, book_recipe  # noqa: E402
 from vgai_lite.book import TEST_SEED  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -46,20 +47,21 @@ def _flock(rec: dict) -> str:
 
 
 def _recipe(rec: dict) -> str:
-    t = rec["train_config"]
-    return "" if t.get("motion_features") and t.get("learner_swarms") else " (not the book's recipe)"
+    t = VGAITrainConfig.from_dict(rec["train_config"])
+    return "" if t == book_recipe(F=t.F, K=t.K, seed=t.seed) else " (not the book's recipe)"
 
 
 TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3 (exact features)",
-               "vgai_F24": "VGAI, F = 24, K-1 = 3 (images only; the book's recipe)",
-               "vgai_F24_mixture": "VGAI, the book's recipe without the learner flying alone (DAgger's mixture only)"}
+               "vgai_F24": "VGAI, F = 24, K-1 = 3 (images only, trained through the camera: the book's recipe)",
+               "vgai_clean": "VGAI, the book's recipe on clean frames (no camera model; training seed 0)",
+               "vgai_F24_mixture": "VGAI, the recipe on clean frames without the learner flying alone (DAgger's mixture only)"}
 
 
 def _test_labels() -> dict:
-    """TEST_LABELS, then the camera-trained VGAIs notebook 08 chooses and the paper's VGAI (notebook 11)."""
+    """TEST_LABELS, then the gray-only camera VGAI notebook 08 chooses and the paper's VGAI (notebook 11)."""
     labels = dict(TEST_LABELS)
-    for sensor, name in chosen_camera_runs().items():
-        labels[name] = f"VGAI trained through the camera, {sensor} (notebook 08's choice; clean frames here)"
+    gray = chosen_camera_runs()["gray only"]
+    labels[gray] = "VGAI trained through the camera, gray only, no depth (notebook 08's choice; clean frames here)"
     for s in PAPER_SEEDS:
         labels[f"vgai_paper_seed{s}"] = ("The paper's VGAI as the paper describes it (one gray frame, from random "
                                          f"weights), training seed {s}")
@@ -223,16 +225,15 @@ def _robustness() -> str:
 
     eps = res["config"]["episodes"]
     stale = clean.get("checkpoint") != robustness.checkpoint_id(robustness.CONTROLLERS["VGAI"])
-    return (("**Not yet recomputed for the shipped VGAI**: the sweep below flew the book's earlier VGAI (without the "
-             "learner flying alone). " if stale else "")
+    return (("**Not yet recomputed for the shipped VGAI**: the sweep below flew an earlier VGAI of the book. " if stale else "")
             + f"Robustness (notebook 08, `python -m vgai_lite reproduce --only robustness`; {eps} episodes of seed "
             f"{res['config']['seed']} per "
             f"cell): with {T['links_p']:.0%} of messages lost VGAI costs {_ci(links)} (clean {_ci(clean)}; Local "
             f"unperturbed {local['relative_cost_mean']:.2f}), connected at 5 s in {links['share_connected_at_end']:.0%} "
             f"of episodes; the DAGNN {_ci(dl)}. With pixel noise sigma = {T['image_noise_sigma']:g} on the gray channel "
             f"VGAI costs {_ci(noisy)}, {noisy['relative_cost_mean'] / clean['relative_cost_mean']:.2f}x its clean cost. "
-            f"Trained through the camera from the start (notebook 08, section 6; "
-            f"{cams['gray + depth'][1]['clean']['episodes']} validation episodes): "
+            f"The recipe through the camera, training seed 0 (notebook 08, section 6; "
+            f"{cams['gray + depth'][1]['clean']['episodes']} validation episodes; gray + depth is the book's recipe): "
             + "; ".join(through(s) for s in ("gray + depth", "gray only")) + ".")
 
 

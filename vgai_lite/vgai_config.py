@@ -6,8 +6,7 @@ warm start (the CNN and the MLP learn together from random weights by K-step BPT
 action loss of eq. 10 alone, DAgger's mixture (p = 0.33). The paper gives the sensor, the networks,
 the loss, the optimiser (Adam, learning rate 1e-3) and DAgger's probability; the training's length,
 the resolution and every other field are our choice, explained beside it. The book's VGAI (``BOOK``,
-``book_recipe``) is the paper's with the book's departures (``BOOK_RECIPE``): its sensor and warm
-starts (``BOOK_SENSOR``) and the four changes notebook 11's ablation measures.
+``book_recipe``) is the paper's with the book's departures (``BOOK_RECIPE``), which notebook 11 adds one at a time.
 """
 
 from __future__ import annotations
@@ -81,7 +80,7 @@ class VGAITrainConfig:
             training window (``camera.CameraRanges``: sensor noise, lens blur, exposure, a dead
             camera; domain randomisation). Every stage sees the frames through it: stage 1's states,
             stage 2's flights, stage 3's windows and the learner's own DAgger flights. Default: the
-            ideal camera (the paper renders clean AirSim frames).
+            ideal camera (the paper's clean AirSim frames); the book's: ``BOOK_CAMERA``.
     """
 
     F: int = 24
@@ -193,11 +192,15 @@ BOOK_SENSOR = {"vision": VisionConfig(), "warm_starts": True}
 """The book's sensor (gray and depth, with a motion channel from the frame g steps earlier) and its
 warm starts (stage 1's state estimation, stage 2's MLP fit): the departures every book VGAI makes."""
 
+BOOK_CAMERA = CameraRanges((0.0, 0.05), (0.0, 1.4), (0.9, 1.1), (-0.03, 0.03), dead_share=0.05, depth_noise=(0.0, 0.05))
+"""The camera the book's VGAI is trained through: ranges just past the paper's own test (noise 10/255, blur
+about 0.5 degrees), chosen over wider ones on the validation episodes (notebook 08, ``runs.CAMERA_RUNS``)."""
+
 BOOK_RECIPE = {**BOOK_SENSOR, "motion_features": None, "synthetic_share": 0.5, "aux_weight": 5.0,
-               "learner_swarms": 0.5}
-"""The book's changes to the paper's VGAI: ``BOOK_SENSOR``, then the four measured in notebook 11's
-ablation: odd motion features (F_m = F // 3), synthetic relative velocities in stage 1, the
-state-estimation loss kept in stage 3, half of DAgger's swarms flown by the learner alone."""
+               "learner_swarms": 0.5, "camera": BOOK_CAMERA}
+"""The book's changes to the paper's VGAI: ``BOOK_SENSOR``, then those added in notebook 11's ablation:
+odd motion features (F_m = F // 3), synthetic relative velocities in stage 1, the state-estimation
+loss kept in stage 3, half of DAgger's swarms flown by the learner alone, the camera (``BOOK_CAMERA``)."""
 
 
 def book_recipe(**fields) -> VGAITrainConfig:

@@ -40,14 +40,16 @@ from vgai_lite import FlockConfig, load_controller, rollout, sample_initial_stat
 from vgai_lite.book import DATA_DIR, WORKING_SEED  # noqa: E402
 from vgai_lite.lab.provenance import Provenance, repo_relative, sha256  # noqa: E402
 
-VGAIS = {"VGAI without the learner flying alone (DAgger's mixture only), training seed 0": "experiments/vgai_F24_mixture.pt",
+VGAIS = {"VGAI on clean frames without the learner flying alone (DAgger's mixture only), training seed 0": "experiments/vgai_F24_mixture.pt",
          "VGAI, ablation row 1 (the paper's CNN, loss and mixture; the book's sensor and warm starts)":
              "experiments/vgai_F24_plain.pt",
          "the paper's VGAI (one gray frame), training seed 0": "experiments/vgai_paper_seed0.pt",
-         "VGAI through the camera, gray + depth (vgai_depthcam), training seed 0": "experiments/vgai_depthcam.pt",
+         "VGAI through the camera, gray + depth (vgai_depthcam: the book's recipe), training seed 0":
+             "experiments/vgai_depthcam.pt",
          "VGAI through the camera, gray only (vgai_camera_narrow_gray), training seed 0":
              "experiments/vgai_camera_narrow_gray.pt"}
-"""The VGAIs flown beside the book's recipe (its three training seeds, data/vgai/seeds/), by label."""
+"""The VGAIs flown beside the recipe on clean frames (its three training seeds, data/experiments/vgai_clean_seedS;
+the book's VGAI until the camera model), by label."""
 from vgai_lite.flocking import velocity_variance  # noqa: E402
 
 TIMES = (2.0, 5.0)
@@ -103,8 +105,8 @@ def main(argv=None) -> int:
     read = [DATA_DIR / "dagnn" / "dagnn_K4.pt", DATA_DIR / "experiments" / "estimator_odd8_synth0.5.pt"]
     pilots = {"DAGNN (K - 1 = 3)": dagnn,
               "modular vision pilot (odd estimator -> DAGNN's MLP)": VisionDAGNN(dagnn, *odd_estimator(cfg))}
-    for path in sorted((DATA_DIR / "vgai" / "seeds").glob("vgai_F24_seed*.pt")):
-        pilots[f"VGAI, the book's recipe, training seed {path.stem.rsplit('seed', 1)[1]}"] = load_controller(path)
+    for path in sorted((DATA_DIR / "experiments").glob("vgai_clean_seed*.pt")):
+        pilots[f"VGAI, the recipe on clean frames, training seed {path.stem.rsplit('seed', 1)[1]}"] = load_controller(path)
         read.append(path)
     for label, rel in VGAIS.items():
         pilots[label] = load_controller(DATA_DIR / rel)

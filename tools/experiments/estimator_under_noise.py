@@ -2,7 +2,7 @@
 
     python tools/experiments/estimator_under_noise.py --out data/experiments/estimator_under_noise.json
 
-For each checkpoint (the shipped VGAI, trained on clean frames, and the VGAIs trained through the
+For each checkpoint (the book's recipe on clean frames (training seed 0), and the VGAIs trained through the
 camera), its CNN's state-estimation head (kept by the book's recipe, ``aux_weight`` > 0) is read on
 expert flights from validation initial conditions (``book.VALIDATION_SEED``) seen through sensor
 noise of each sigma (on the gray channel): the correlation of each of the six estimated local features (eq. 9:
@@ -32,7 +32,7 @@ from vgai_lite.state_estimation import estimator_quality  # noqa: E402
 
 SIGMAS = (0.0, 0.02, 10 / 255, 0.05, 0.1)
 TIMES = (2, 8, 20)
-CHECKPOINTS = ("vgai/vgai_F24", "experiments/vgai_depthcam_wide", "experiments/vgai_camera_gray",
+CHECKPOINTS = ("experiments/vgai_clean_seed0", "experiments/vgai_depthcam_wide", "experiments/vgai_camera_gray",
                "experiments/vgai_depthcam", "experiments/vgai_camera_narrow_gray")
 
 

@@ -89,7 +89,7 @@ paper_vs_book.show()
 # | [**05** the visual CNN](05_visual_state_cnn.ipynb) | residual blocks, vertical-only pooling, $F$ features, visual state estimation | §3.3, Fig. 2 |
 # | [**06** VGAI](06_vgai_joint_training.ipynb) | CNN and DAGNN trained jointly, K-step backpropagation through time, evaluated on the test episodes | §3.4, Fig. 3 |
 # | [**07** experiments](07_experiments.ipynb) | the paper's tables regenerated, the paper's numbers beside ours | §4 |
-# | [**08** robustness](08_robustness.ipynb) | no silent NaN; noisy and dead cameras, lost and late messages, larger teams; a cure measured | §4 and beyond |
+# | [**08** robustness](08_robustness.ipynb) | no silent NaN; noisy and dead cameras, lost and late messages, larger teams; the camera VGAI is trained through | §4 and beyond |
 # | [**09** results at a glance](09_results_at_a_glance.ipynb) | every controller on the test episodes; a fair comparison with the paper; what is still open | §4-5 |
 # | [**10** appendix: Ray](10_appendix_ray.ipynb) | the reproduction as Ray tasks; the full run projected on several machines | beyond |
 # | [**11** case study: what makes VGAI flock](11_what_makes_vgai_flock.ipynb) | the book's departures from the paper one at a time and left out in turn, against the spread between training seeds; the paper's VGAI as described | §3.3, beyond |

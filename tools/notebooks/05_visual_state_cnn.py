@@ -102,7 +102,8 @@ plt.show()
 # and the motion channel) at a few settings: the motion channel is where the noise hurts, since it
 # is a difference of two noisy frames, amplified by the same gain that makes the small motions
 # readable. A training can draw these settings per flight (`VGAITrainConfig.camera`, a
-# `CameraRanges`): notebook 08 measures what that buys.
+# `CameraRanges`): the book's VGAI is trained that way (`BOOK_CAMERA`), and notebook 08 measures
+# what it buys.
 
 # %%
 from vgai_lite.camera import Camera, CameraRanges
@@ -201,8 +202,9 @@ for name, (_, _, meta) in estimators.items():
 # The two-frame estimator is exactly stage 1 of the VGAI with the paper's CNN, action loss and DAgger
 # mixture but the book's sensor and warm starts (the same CNN, steps, states, episodes and seed: the
 # first row of notebook 11's ablation (section 1), which is not the paper's VGAI: notebook 11 flies that one too, section 2).
-# (The book's recipe changes stage 1 in two ways, synthetic relative velocities and odd motion
-# features, which notebook 11 adds and measures one at a time.)
+# (The book's recipe changes stage 1 in three ways: synthetic relative velocities and odd motion
+# features, which notebook 11 adds and measures one at a time, and the camera of notebook 08,
+# through which it sees every frame.)
 
 # %% [markdown]
 # How well does each estimate each feature? Correlation with the exact features on held-out expert
