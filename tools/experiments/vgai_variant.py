@@ -36,13 +36,15 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import PAPER, CameraRanges, FlockConfig, VGAITrainConfig, load_controller, relative_cost, train_vgai  # noqa: E402
 from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
-from vgai_lite.vgai_config import PAPER_VISION  # noqa: E402
+from vgai_lite.vgai_config import PAPER_VISION, book_recipe  # noqa: E402
 from vgai_lite.vision import VisionConfig  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.runs import STAGE1_CACHE, VGAI_RUNS  # noqa: E402
 from vgai_lite.lab.stage1_cache import cached  # noqa: E402
 
-BASES = {**VGAI_RUNS, "paper": PAPER}
+BASES = {**VGAI_RUNS, "vgai_F24": book_recipe(seed=0), "paper": PAPER}
+"""The recipes a variant starts from, all at training seed 0 unless --seed says otherwise (the shipped vgai_F24
+is the seed the book's rule chose, ``runs.VGAI_F24_SEED``; a variant is compared with seed 0's training)."""
 
 
 def main(argv=None) -> int:
