@@ -445,7 +445,7 @@ else:
 # * VGAI trains the CNN and the MLP together by K-step backpropagation through time; the book warm-starts both first (notebook 11 flies its recipe without the warm starts, and the paper's VGAI, which has none).
 # * DAgger labels every state the learner visits with the expert's action; the book's recipe also lets the learner fly half of each round's swarms alone (notebook 11 measures why).
 # * Every stage of the book's training sees its frames through a camera model (noise, blur, exposure, a dead camera), so that the swarm keeps flocking through imperfect cameras (notebook 08 measures how far it does).
-* More features per message is more bytes sent; section 4 judges whether they buy a lower cost by the book's one rule.
+# * More features per message is more bytes sent; section 4 judges whether they buy a lower cost by the book's one rule.
 # * Features odd in the motion channels read exactly zero when nothing moves (exercise 06.3).
 # * Judge a learned controller over a longer horizon than its training episodes, choose on validation episodes and report on test episodes.
 #

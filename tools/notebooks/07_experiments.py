@@ -239,8 +239,10 @@ if below_expert:
 if above_local:
     bounds.append("**The local heuristic is not an upper bound for VGAI here.** With a larger radius every drone has "
                   "many neighbours, and the local rule's sums over them align the swarm fast; VGAI, trained at "
-                  "R = 1.5 m, aggregates over a denser graph than it was trained on (a likely reason: the row "
-                  "'VGAI (retrained)', trained at that radius, tells how much of the gap retraining closes).")
+                  "R = 1.5 m, aggregates over a denser graph than it was trained on"
+                  + (" (a likely reason: the row 'VGAI (retrained)', trained at that radius, tells how much of the gap "
+                     "retraining closes)." if results["tables"]["R"]["rows"].get("VGAI (retrained)") else
+                     " (a likely reason, which a VGAI retrained at that radius would test: `reproduce --extras`)."))
 prose("{text}", text="\n\n".join(bounds) if bounds else
       "Both bounds the paper states hold in our tables: no controller beats the expert, and VGAI stays below Local.")
 
