@@ -156,7 +156,7 @@ def test_a_training_over_teams_and_radii_flies_groups_drawn_from_them():
     """flight_groups: without teams and radii every swarm flies the training's configuration (and draws
     nothing, so such a training is the one it always was); with them, groups of ``group_swarms`` whose
     N comes from ``teams``, R from the range, large teams drawn as the book's evaluation draws them."""
-    from vgai_lite.dagnn_training import LARGE_TEAM, flight_groups
+    from vgai_lite.imitation import LARGE_TEAM, flight_groups
     from vgai_lite.lab.reproduce import ReproduceConfig
 
     assert LARGE_TEAM == ReproduceConfig().repair_from

@@ -156,7 +156,7 @@ def _meshcat_servers():
 
 
 def test_meshcat_view_is_standalone_html_and_leaves_no_server_behind():
-    from vgai_lite.viz3d import swarm_scene_html
+    from vgai_lite.lab.viz3d import swarm_scene_html
 
     cfg = CFG.replace(N=8, T=20)
     r, v = sample_initial_state(cfg, 1, torch.Generator().manual_seed(0))

@@ -434,3 +434,63 @@ def test_how_a_training_ran_says_alone_or_sharing_from_its_provenance():
     assert how_trained(rec(1, 2.0)) == "1 thread, sharing the cores"  # one of two trainings side by side
     assert how_trained(rec(1, 1.1)) == "1 thread, alone"
     assert how_trained({}) is None
+
+
+def test_a_vgai_training_over_teams_and_radii_learns_from_every_group_with_as_many_images_per_step(tmp_path, monkeypatch):
+    """teams/radii: round 0 and every DAgger round fly groups of several N and R; stage 1's states and
+    stage 3's windows come from every group, in batches scaled by 1 / N (``per_team``), each window's
+    GSO and local features of its own group's N and R; the controller it returns flies the training's cfg."""
+    import vgai_lite.vgai_training as vt
+    cfg = FlockConfig(N=12, T=20)
+    tcfg = dataclasses.replace(MINI, teams=(6, 12), radii=(1.0, 2.0), group_swarms=1, expert_episodes=6,
+                               episodes_per_round=3, warm_steps=12, joint_steps=12, warm_states=2)
+    states, windows = [], []
+    batch, window = vt.estimation_batch, vt.window_batch
+
+    def record_states(c, t, r, v, gen, n=None):
+        img, x = batch(c, t, r, v, gen, n)
+        states.append((c.N, c.R, img.shape[:2]))
+        return img, x
+
+    def record_windows(c, t, r, v, u, e, t_end, camera=None):
+        w = window(c, t, r, v, u, e, t_end, camera)
+        windows.append((c.N, c.R, len(e)))
+        assert w["S"].shape[-1] == c.N and torch.equal(w["S"][:, -1], gso(adjacency(r[t_end, e], c.R), t.gso))
+        return w
+
+    monkeypatch.setattr(vt, "estimation_batch", record_states)
+    monkeypatch.setattr(vt, "window_batch", record_windows)
+    ctrl, hist = train_vgai(cfg, tcfg, checkpoint=tmp_path / "t.pt", progress=False, check_episodes=1)
+    assert len({n for n, _, _ in states}) == 2 and len({n for n, _, _ in windows}) == 2
+    assert len({r for _, r, _ in windows}) > 2 and all(1.0 <= r <= 2.0 for _, r, _ in windows)
+    assert all(shape == (2 * 12 // n, n) for n, _, shape in states)  # 2 swarms of 12 = 4 of 6 drones' images
+    assert all(m == 2 * 12 // n for n, _, m in windows)
+    assert ctrl.cfg == cfg and ctrl.camera is None
+    assert VGAITrainConfig.from_dict(load_controller(tmp_path / "t.pt").meta["train_config"]) == tcfg
+
+
+def test_a_vgai_training_without_teams_or_radii_is_read_from_files_written_before_them():
+    stored = {k: v for k, v in MINI.to_dict().items() if k not in ("teams", "radii", "group_swarms")}
+    assert VGAITrainConfig.from_dict(stored) == MINI and VGAITrainConfig.read_stored(stored) == MINI.to_dict()
+
+
+@pytest.mark.parametrize("bad, match", [({"teams": (1,)}, "teams must be whole numbers"),
+                                        ({"teams": (50.0,)}, "teams must be whole numbers"),
+                                        ({"radii": (2.0, 1.0)}, "radii must be"), ({"radii": (1.0,)}, "radii must be"),
+                                        ({"group_swarms": 0}, "group_swarms")])
+def test_teams_and_radii_are_checked(bad, match):
+    with pytest.raises(ValueError, match=match):
+        dataclasses.replace(MINI, **bad)
+
+
+def test_stored_flights_are_joined_per_configuration_and_never_across_them():
+    from vgai_lite.imitation import EpisodeStore
+    store, gen = EpisodeStore(), torch.Generator().manual_seed(0)
+    a, b = FlockConfig(N=6, T=3), FlockConfig(N=8, T=3)
+    for c in (a, b, a):
+        store.fly(None, c, *sample_initial_state(c, 2, gen), 0.0, gen)
+    groups = store.groups()
+    assert [g.cfg for g in groups] == [a, b] and [g.r.shape for g in groups] == [(3, 4, 6, 2), (3, 2, 8, 2)]
+    torch.testing.assert_close(groups[0].u[:, 2:], store.u[2])
+    with pytest.raises(ValueError, match="groups()"):
+        store.tensors()

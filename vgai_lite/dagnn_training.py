@@ -20,7 +20,7 @@ from .config import FlockConfig, config_dict
 from .flocking import sample_initial_state
 from .features import N_LOCAL_FEATURES
 from .graphs import DEFAULT_GSO, GSO_KINDS
-from .imitation import fit_l1, fly_dagger, round_check
+from .imitation import check_flight_mix, fit_l1, flight_groups, fly_dagger, round_check
 from .learned_controllers import FEATURE_TRANSFORMS, DAGNNController
 from .models import AggregationMLP
 
@@ -80,11 +80,8 @@ class DAGNNTrainConfig:
     written before them was trained with: no randomisation of N and R (before 2026-12-04)."""
 
     def __post_init__(self) -> None:
-        if any(not isinstance(n, int) or isinstance(n, bool) or n < 2 for n in self.teams):
-            raise ValueError(f"DAGNNTrainConfig: teams must be whole numbers of drones >= 2, got {self.teams!r}")
-        if self.radii and (len(self.radii) != 2 or not 0 < self.radii[0] <= self.radii[1]):
-            raise ValueError(f"DAGNNTrainConfig: radii must be (low, high) in m with 0 < low <= high, got {self.radii!r}")
-        for name in ("K", "rounds", "episodes_per_round", "epochs_per_round", "batch_size", "group_swarms"):
+        check_flight_mix("DAGNNTrainConfig", self.teams, self.radii, self.group_swarms)
+        for name in ("K", "rounds", "episodes_per_round", "epochs_per_round", "batch_size"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ValueError(f"DAGNNTrainConfig: {name} must be a whole number >= 1, got {value!r}")
@@ -145,30 +142,6 @@ def collect(learner: DAGNNController, cfg: FlockConfig, r0: torch.Tensor, v0: to
 
     fly_dagger(learner, cfg, r0, v0, p_learner, generator, record)
     return torch.cat(Zs), torch.cat(Us)
-
-
-LARGE_TEAM = 75
-"""From this team size on, a group's initial states are drawn with ``init_method="repair"`` (rejection
-of whole swarms rarely succeeds there), as the book's evaluation draws them."""
-
-
-def flight_groups(cfg: FlockConfig, tcfg: DAGNNTrainConfig, swarms: int, gen: torch.Generator) -> list:
-    """The configurations one round's ``swarms`` swarms fly in, as (FlockConfig, count) pairs: all of
-    them in ``cfg`` without ``tcfg.teams`` and ``tcfg.radii``, else groups of ``tcfg.group_swarms``,
-    each with N drawn from ``teams`` and R uniform in ``radii`` (``gen``)."""
-    if not tcfg.teams and not tcfg.radii:
-        return [(cfg, swarms)]
-    groups = []
-    for start in range(0, swarms, tcfg.group_swarms):
-        changes = {}
-        if tcfg.teams:
-            n = tcfg.teams[int(torch.randint(len(tcfg.teams), (1,), generator=gen))]
-            changes.update(N=n, init_method="repair" if n >= LARGE_TEAM else cfg.init_method)
-        if tcfg.radii:
-            lo, hi = tcfg.radii
-            changes["R"] = lo + (hi - lo) * float(torch.rand((), generator=gen, dtype=torch.float64))
-        groups.append((cfg.replace(**changes), min(tcfg.group_swarms, swarms - start)))
-    return groups
 
 
 def train_dagnn(cfg: FlockConfig, tcfg: DAGNNTrainConfig = DAGNNTrainConfig(),

@@ -7,7 +7,8 @@ learner's action instead of the expert's with probability p = 0.33 at every step
 exercise 06.1), every visited state is labelled with the expert's action, and the data of all
 rounds are aggregated.
 
-Here: the mixing rule, one DAgger flight (``fly_dagger``), the stored flights (``EpisodeStore``),
+Here: the mixing rule, one DAgger flight (``fly_dagger``), the team sizes and radii a training's swarms
+fly with (``flight_groups``), the stored flights (``EpisodeStore``),
 one minibatch L1 fit loop (``fit_l1``), the check a training logs after each round (``round_check``),
 and one load-or-train contract (``load_or_train``). The trainings themselves are ``dagnn_training`` and ``vgai_training``.
 """
@@ -17,7 +18,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Optional, Union
+from typing import Callable, NamedTuple, Optional, Union
 
 import torch
 import torch.nn.functional as nnf
@@ -68,14 +69,58 @@ def fly_dagger(learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_
         r, v = step(r, v, saturate(u, cfg), cfg)
 
 
+LARGE_TEAM = 75
+"""From this team size on, a group's initial states are drawn with ``init_method="repair"`` (rejection
+of whole swarms rarely succeeds there), as the book's evaluation draws them."""
+
+
+def check_flight_mix(owner: str, teams: tuple, radii: tuple, group_swarms: int) -> None:
+    """A training configuration's ``teams``, ``radii`` and ``group_swarms`` (``flight_groups``), or a clear error."""
+    if any(not isinstance(n, int) or isinstance(n, bool) or n < 2 for n in teams):
+        raise ValueError(f"{owner}: teams must be whole numbers of drones >= 2, got {teams!r}")
+    if radii and (len(radii) != 2 or not 0 < radii[0] <= radii[1]):
+        raise ValueError(f"{owner}: radii must be (low, high) in m with 0 < low <= high, got {radii!r}")
+    if not isinstance(group_swarms, int) or isinstance(group_swarms, bool) or group_swarms < 1:
+        raise ValueError(f"{owner}: group_swarms must be a whole number >= 1, got {group_swarms!r}")
+
+
+def flight_groups(cfg: FlockConfig, tcfg, swarms: int, gen: torch.Generator) -> list:
+    """The configurations ``swarms`` swarms fly in, as (FlockConfig, count) pairs: all of them in ``cfg``
+    without ``tcfg.teams`` and ``tcfg.radii`` (no draw), else groups of ``tcfg.group_swarms``, each with
+    N drawn from ``teams`` and R uniform in ``radii`` (``gen``)."""
+    if not tcfg.teams and not tcfg.radii:
+        return [(cfg, swarms)]
+    groups = []
+    for start in range(0, swarms, tcfg.group_swarms):
+        changes = {}
+        if tcfg.teams:
+            n = tcfg.teams[int(torch.randint(len(tcfg.teams), (1,), generator=gen))]
+            changes.update(N=n, init_method="repair" if n >= LARGE_TEAM else cfg.init_method)
+        if tcfg.radii:
+            lo, hi = tcfg.radii
+            changes["R"] = lo + (hi - lo) * float(torch.rand((), generator=gen, dtype=torch.float64))
+        groups.append((cfg.replace(**changes), min(tcfg.group_swarms, swarms - start)))
+    return groups
+
+
+class Flights(NamedTuple):
+    """Stored flights of one flight configuration ``cfg``: r, v, u* (the expert's action), (T, E, N, 2) each."""
+    cfg: FlockConfig
+    r: torch.Tensor
+    v: torch.Tensor
+    u: torch.Tensor
+
+
 @dataclass
 class EpisodeStore:
     """Stored flights, aggregated over DAgger rounds: r, v, u* (the expert's action), each a list of
-    (T, E, N, 2) tensors; ``tensors()`` joins them along the episodes."""
+    (T, E, N, 2) tensors, flown in the configurations ``cfgs``; ``groups()`` joins them along the episodes
+    per configuration, ``tensors()`` when they all flew one."""
 
     r: list = field(default_factory=list)
     v: list = field(default_factory=list)
     u: list = field(default_factory=list)
+    cfgs: list = field(default_factory=list)
 
     def fly(self, learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_learner: float,
             generator: torch.Generator, steps: Optional[int] = None) -> None:
@@ -85,8 +130,20 @@ class EpisodeStore:
         fly_dagger(learner, cfg, r0, v0, p_learner, generator,
                    lambda t, r, v, u_star, Z: (rs.append(r), vs.append(v), us.append(u_star)), steps)
         self.r.append(torch.stack(rs)), self.v.append(torch.stack(vs)), self.u.append(torch.stack(us))
+        self.cfgs.append(cfg)
+
+    def groups(self) -> list:
+        """The flights joined per flight configuration, in the order first flown: a list of ``Flights``."""
+        joined = {}
+        for c, *flown in zip(self.cfgs, self.r, self.v, self.u):
+            joined.setdefault(c, []).append(flown)
+        return [Flights(c, *(torch.cat(x, 1) for x in zip(*flown))) for c, flown in joined.items()]
 
     def tensors(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """r, v, u* of every flight, (T, E, N, 2) each: the flights must share one configuration."""
+        if len(set(self.cfgs)) > 1:
+            raise ValueError(f"EpisodeStore.tensors: the flights flew {len(set(self.cfgs))} configurations; "
+                             "use groups() for flights of several team sizes or radii")
         return torch.cat(self.r, 1), torch.cat(self.v, 1), torch.cat(self.u, 1)
 
     @property

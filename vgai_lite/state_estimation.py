@@ -60,7 +60,6 @@ def train_state_estimator(cfg: FlockConfig, vision: VisionConfig, steps: int = 3
         start = time.perf_counter()
         store = EpisodeStore()
         store.fly(None, cfg, *sample_initial_state(cfg, episodes, gen), 0.0, gen)
-        r, v, _ = store.tensors()
         cnn = tcfg.new_model().cnn
-        losses = fit_state_estimator(cnn, cfg, tcfg, r, v, gen, progress)
+        losses = fit_state_estimator(cnn, cfg, tcfg, store.groups(), gen, progress)
     return cnn, losses, time.perf_counter() - start

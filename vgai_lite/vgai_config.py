@@ -18,6 +18,7 @@ from typing import ClassVar, Optional
 from .camera import CameraRanges
 from .config import config_dict
 from .graphs import DEFAULT_GSO
+from .imitation import check_flight_mix
 from .models import AggregationMLP, VGAIModel, visual_cnn
 from .render import RenderConfig
 from .vision import VisionConfig
@@ -81,6 +82,12 @@ class VGAITrainConfig:
             camera; domain randomisation). Every stage sees the frames through it: stage 1's states,
             stage 2's flights, stage 3's windows and the learner's own DAgger flights. Default: the
             ideal camera (the paper's clean AirSim frames); the book's: ``BOOK_CAMERA``.
+        teams, radii, group_swarms: the team sizes N and the range (low, high) of communication radii
+            R (m) the training's swarms fly with, in groups of ``group_swarms`` swarms, each with N drawn
+            from ``teams`` and R uniform in ``radii`` (``imitation.flight_groups``, as the DAGNN's). A
+            training step draws the group of a random stored episode, with 1 / N-scaled batches
+            (``per_team``): every step sees about as many drone images. Empty (the paper's): every swarm
+            flies the training's configuration; the authors' released code draws R per sample.
     """
 
     F: int = 24
@@ -91,9 +98,9 @@ class VGAITrainConfig:
     cnn_hidden: int = 64
     vision: VisionConfig = PAPER_VISION
     warm_starts: bool = False
-    LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True}
+    LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True, "teams": [], "radii": [], "group_swarms": 8}
     """Fields added after files were written, with the value every file written before them had (until
-    2026-12-04 every VGAI training warm-started)."""
+    2026-12-04 every VGAI training warm-started; until 2026-12-06 none drew N or R)."""
     expert_episodes: int = 40
     dagger_rounds: int = 4
     episodes_per_round: int = 16
@@ -115,6 +122,9 @@ class VGAITrainConfig:
     aux_weight: float = 0.0
     learner_swarms: float = 0.0
     camera: CameraRanges = CameraRanges()
+    teams: tuple = ()
+    radii: tuple = ()
+    group_swarms: int = 8
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
@@ -132,6 +142,7 @@ class VGAITrainConfig:
         for name in ("p_learner", "early_share", "synthetic_share", "learner_swarms"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"VGAITrainConfig: {name} is a probability, in [0, 1]; got {getattr(self, name)!r}")
+        check_flight_mix("VGAITrainConfig", self.teams, self.radii, self.group_swarms)
         if not isinstance(self.warm_starts, bool):
             raise ValueError(f"VGAITrainConfig: warm_starts must be True or False, got {self.warm_starts!r}")
         if not self.lr > 0 or not self.aux_weight >= 0:
@@ -171,7 +182,7 @@ class VGAITrainConfig:
             raise ValueError(f"a VGAI training configuration lacks {missing} and has unknown fields {unknown}: "
                              "it was written by another version of vgai_lite; train the model again")
         d = {**d, "vision": VisionConfig.from_dict(d["vision"]), "camera": CameraRanges.from_dict(d["camera"])}
-        for name in ("hidden", "cnn_widths", "synthetic_speeds"):
+        for name in ("hidden", "cnn_widths", "synthetic_speeds", "teams", "radii"):
             d[name] = tuple(d[name])
         return VGAITrainConfig(**d)
 

@@ -41,7 +41,7 @@ from .config import FlockConfig
 from .features import N_LOCAL_FEATURES, local_features
 from .flocking import sample_initial_state
 from .graphs import adjacency, gso
-from .imitation import EpisodeStore, fit_l1, round_check
+from .imitation import EpisodeStore, Flights, fit_l1, flight_groups, round_check
 from .learned_controllers import VGAIController
 from .models import VGAIModel, VisualCNN
 from .vgai_config import VGAITrainConfig
@@ -59,14 +59,27 @@ def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> t
     return torch.where(early, t_early, t_any)
 
 
+def pick(flights: list, gen: torch.Generator) -> Flights:
+    """One group of stored ``Flights``, each stored episode equally likely (no draw when there is one)."""
+    if len(flights) == 1:
+        return flights[0]
+    episodes = torch.tensor([float(f.r.shape[1]) for f in flights])
+    return flights[int(torch.multinomial(episodes, 1, generator=gen))]
+
+
+def per_team(swarms: int, cfg: FlockConfig, flight: FlockConfig) -> int:
+    """``swarms`` swarms of the training's N (``cfg``) as swarms of ``flight``'s: as many drone images."""
+    return max(1, swarms * cfg.N // flight.N)
+
+
 # ---------------------------------------------------------------------------------------------
 # Stage 1: visual state estimation (section 3.3; notebook 05)
 
 
-def feature_scale(cfg: FlockConfig, r: torch.Tensor, v: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """Mean and spread of the 6 exact local features over stored states r, v (T, E, N, 2): (6,), (6,)."""
-    X = local_features(r.flatten(0, 1), v.flatten(0, 1), cfg.R)
-    return X.mean((0, 1)), X.std((0, 1)).clamp(min=1e-6)
+def feature_scale(flights: list) -> tuple[torch.Tensor, torch.Tensor]:
+    """Mean and spread of the 6 exact local features over every agent's stored states (``Flights``): (6,), (6,)."""
+    X = torch.cat([local_features(f.r.flatten(0, 1), f.v.flatten(0, 1), f.cfg.R).flatten(0, 1) for f in flights])
+    return X.mean(0), X.std(0).clamp(min=1e-6)
 
 
 def synthetic_velocities(v: torch.Tensor, speeds: tuple, gen: torch.Generator) -> torch.Tensor:
@@ -78,13 +91,13 @@ def synthetic_velocities(v: torch.Tensor, speeds: tuple, gen: torch.Generator) -
 
 
 def estimation_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
-                     gen: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
-    """``tcfg.warm_states`` stored swarm states of flights r, v (T, E, N, 2): every agent's image
+                     gen: torch.Generator, states: Optional[int] = None) -> tuple[torch.Tensor, torch.Tensor]:
+    """``states`` (default ``tcfg.warm_states``) stored swarm states of flights r, v (T, E, N, 2) of ``cfg``: every agent's image
     (M, N, C, H, W) and its exact local features (M, N, 6), seen through cameras drawn from
     ``tcfg.camera``. A ``tcfg.synthetic_share`` of them is shown with synthetic velocities (the motion
     frame drawn from the state flown backwards at them)."""
     T, E = r.shape[:2]
-    vision, states = tcfg.vision, tcfg.warm_states
+    vision, states = tcfg.vision, states or tcfg.warm_states
     e = torch.randint(0, E, (states,), generator=gen)
     t = sample_times(states, T, tcfg, gen)
     cam = draw_camera(tcfg.camera, vision.render, states, cfg.N, gen)
@@ -105,12 +118,13 @@ def estimation_loss(cnn: VisualCNN, X: torch.Tensor, x_exact: torch.Tensor) -> t
     return nnf.l1_loss(cnn.aux_standardized(X.reshape(-1, cnn.F)), target.reshape(-1, N_LOCAL_FEATURES))
 
 
-def fit_state_estimator(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor,
-                        v: torch.Tensor, gen: torch.Generator, progress: bool = True) -> list:
+def fit_state_estimator(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, flights: list,
+                        gen: torch.Generator, progress: bool = True) -> list:
     """Stage 1: train the CNN (through its ``aux`` head) to regress the standardised exact local
-    features of every agent from its own images (``tcfg.vision``), on stored states r, v (T, E, N, 2):
-    ``tcfg.warm_steps`` Adam steps on ``estimation_batch``. Returns the L1 loss per step."""
-    x_mean, x_std = feature_scale(cfg, r, v)
+    features of every agent from its own images (``tcfg.vision``), on stored flights (a list of
+    ``imitation.Flights``, e.g. ``EpisodeStore.groups()``) of a training in ``cfg``: ``tcfg.warm_steps``
+    Adam steps on ``estimation_batch``, each of one group (``pick``). Returns the L1 loss per step."""
+    x_mean, x_std = feature_scale(flights)
     if cnn.motion_features:  # the odd velocity estimates are 0 when nothing moves, so is their offset
         x_mean[:2] = 0.0
     cnn.aux_mean.copy_(x_mean), cnn.aux_std.copy_(x_std)
@@ -118,7 +132,8 @@ def fit_state_estimator(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig,
     cnn.train()
     losses = []
     for _ in tqdm(range(tcfg.warm_steps), desc="stage 1: visual state estimation", disable=not progress):
-        img, x_exact = estimation_batch(cfg, tcfg, r, v, gen)
+        f = pick(flights, gen)
+        img, x_exact = estimation_batch(f.cfg, tcfg, f.r, f.v, gen, per_team(tcfg.warm_states, cfg, f.cfg))
         loss = estimation_loss(cnn, cnn(img.flatten(0, 1)), x_exact)
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -128,13 +143,13 @@ def fit_state_estimator(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig,
     return losses
 
 
-def fit_stage1(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
-               gen: torch.Generator, progress: bool = True) -> dict:
+def fit_stage1(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, flights: list, gen: torch.Generator,
+               progress: bool = True) -> dict:
     """Stage 1 as ``train_vgai`` runs it: ``fit_state_estimator``, timed. Returns its history entries.
     (A caller may pass ``train_vgai`` another function of this signature, e.g. one that reads a stage 1
     trained before: ``vgai_lite.lab.stage1_cache``.)"""
     start = time.perf_counter()
-    losses = fit_state_estimator(cnn, cfg, tcfg, r, v, gen, progress)
+    losses = fit_state_estimator(cnn, cfg, tcfg, flights, gen, progress)
     return {"warm_loss": losses, "stage1_seconds": time.perf_counter() - start}
 
 
@@ -142,28 +157,34 @@ def fit_stage1(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch
 # Stage 2: the MLP on the frozen CNN's features
 
 
-def fit_mlp(model: VGAIModel, cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor,
-            u: torch.Tensor, gen: torch.Generator, progress: bool = True) -> list:
-    """Fit NN_Theta on Z(t) built from the frozen CNN's features along stored flights r, v, u*
-    (T, E, N, 2), like the DAGNN on its exact features, each flight seen through cameras drawn from
-    ``tcfg.camera``. Returns the mean L1 loss per epoch."""
-    T, E = r.shape[:2]
+def fit_mlp(model: VGAIModel, tcfg: VGAITrainConfig, flights: list, gen: torch.Generator, progress: bool = True) -> list:
+    """Fit NN_Theta on Z(t) built from the frozen CNN's features along stored flights (``imitation.Flights``),
+    like the DAGNN on its exact features, each flight seen through cameras drawn from ``tcfg.camera``.
+    Returns the mean L1 loss per epoch."""
     model.eval()
-    cam = draw_camera(tcfg.camera, tcfg.vision.render, E, cfg.N, gen)
-    with torch.no_grad():
-        S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
-        X = torch.stack([model.features(stored_images(tcfg.vision, cfg, r, v, torch.arange(E), torch.full((E,), t),
-                                                      cam.at(t) if cam is not None else None))
-                         for t in range(T)])  # (T, E, N, F)
-        Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
-    early = min(tcfg.early_steps, T)
-    keep_t = torch.cat((torch.arange(early), torch.arange(early, T, tcfg.mlp_late_stride)))
-    Zr = Z[:, keep_t].reshape(-1, tcfg.K, tcfg.F)
-    Ur = u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
+    rows = [mlp_rows(model, f, tcfg, gen) for f in flights]
+    Zr, Ur = torch.cat([z for z, _ in rows]), torch.cat([u for _, u in rows])
     model.mlp.set_normalization(Zr)
     opt = torch.optim.Adam(model.mlp.parameters(), lr=tcfg.lr)
     return fit_l1(model.mlp, Zr, Ur, opt, tcfg.mlp_epochs, tcfg.mlp_batch, gen,
                   desc="stage 2: MLP on CNN features", progress=progress)
+
+
+@torch.no_grad()
+def mlp_rows(model: VGAIModel, flights: Flights, tcfg: VGAITrainConfig, gen: torch.Generator) -> tuple:
+    """Stage 2's rows of one group of flights: Z (rows, K, F) from the frozen CNN and the expert's U* (rows, 2);
+    every early step, 1 in ``tcfg.mlp_late_stride`` after."""
+    cfg, r, v, u = flights
+    T, E = r.shape[:2]
+    cam = draw_camera(tcfg.camera, tcfg.vision.render, E, cfg.N, gen)
+    S = gso(adjacency(r.flatten(0, 1), cfg.R), tcfg.gso).view(T, E, cfg.N, cfg.N)
+    X = torch.stack([model.features(stored_images(tcfg.vision, cfg, r, v, torch.arange(E), torch.full((E,), t),
+                                                  cam.at(t) if cam is not None else None))
+                     for t in range(T)])  # (T, E, N, F)
+    Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
+    early = min(tcfg.early_steps, T)
+    keep_t = torch.cat((torch.arange(early), torch.arange(early, T, tcfg.mlp_late_stride)))
+    return Z[:, keep_t].reshape(-1, tcfg.K, tcfg.F), u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -208,11 +229,13 @@ def window_action_loss(mlp, X: torch.Tensor, S: torch.Tensor, u_star: torch.Tens
     return nnf.l1_loss(mlp(aggregation_sequence(X, S, K)[:, -1]), u_star)
 
 
-def sample_windows(T: int, E: int, tcfg: VGAITrainConfig, gen: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
-    """``tcfg.windows`` windows of stored flights (E episodes of T steps): each window's episode e and
-    last step t_end, (M,) each; the last steps drawn by ``sample_times``."""
-    e = torch.randint(0, E, (tcfg.windows,), generator=gen)
-    return e, sample_times(tcfg.windows, T, tcfg, gen)
+def sample_windows(T: int, E: int, tcfg: VGAITrainConfig, gen: torch.Generator,
+                   windows: Optional[int] = None) -> tuple[torch.Tensor, torch.Tensor]:
+    """``windows`` (default ``tcfg.windows``) windows of stored flights (E episodes of T steps): each window's
+    episode e and last step t_end, (M,) each; the last steps drawn by ``sample_times``."""
+    M = windows or tcfg.windows
+    e = torch.randint(0, E, (M,), generator=gen)
+    return e, sample_times(M, T, tcfg, gen)
 
 
 def window_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: torch.Tensor, u: torch.Tensor,
@@ -243,18 +266,21 @@ def joint_loss(model: VGAIModel, tcfg: VGAITrainConfig, w: dict) -> torch.Tensor
 def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, tcfg: VGAITrainConfig,
                 store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True, camera=None) -> list:
     """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights, each window seen through
-    cameras drawn from ``tcfg.camera`` (or through ``camera(frame, lag)`` when given). Returns the losses."""
-    r, v, u = store.tensors()
+    cameras drawn from ``tcfg.camera`` (or through ``camera(frame, lag)`` when given); each step's windows
+    from one group of flights (``pick``, ``per_team``). Returns the losses."""
+    flights = store.groups()
     model.train()
     losses = []
     bar = tqdm(range(tcfg.joint_steps), desc=desc, disable=not progress)
     for _ in bar:
-        e, t_end = sample_windows(r.shape[0], r.shape[1], tcfg, gen)
+        f = pick(flights, gen)
+        M = per_team(tcfg.windows, cfg, f.cfg)
+        e, t_end = sample_windows(f.r.shape[0], f.r.shape[1], tcfg, gen, M)
         seen = camera
         if seen is None:
-            cam = draw_camera(tcfg.camera, tcfg.vision.render, tcfg.windows, cfg.N, gen)
+            cam = draw_camera(tcfg.camera, tcfg.vision.render, M, f.cfg.N, gen)
             seen = cam.repeat(tcfg.K).at(0) if cam is not None else None
-        loss = joint_loss(model, tcfg, window_batch(cfg, tcfg, r, v, u, e, t_end, seen))
+        loss = joint_loss(model, tcfg, window_batch(f.cfg, tcfg, f.r, f.v, f.u, e, t_end, seen))
         opt.zero_grad(set_to_none=True)
         loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
         opt.step()
@@ -266,20 +292,22 @@ def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, 
 
 def dagger_round(learner: VGAIController, store: EpisodeStore, cfg: FlockConfig, tcfg: VGAITrainConfig,
                  gen: torch.Generator) -> None:
-    """One DAgger round's flights, added to ``store``: ``tcfg.episodes_per_round`` swarms, a
-    ``tcfg.learner_swarms`` share of them flown by the learner alone (p = 1), the others under the
-    paper's mixture (the learner followed with probability ``tcfg.p_learner`` at each step). The learner
-    sees through cameras drawn from ``tcfg.camera``, one per swarm for its whole flight."""
+    """One DAgger round's flights, added to ``store``: ``tcfg.episodes_per_round`` swarms (in the groups of
+    ``flight_groups``), a ``tcfg.learner_swarms`` share of them flown by the learner alone (p = 1), the
+    others under the paper's mixture (the learner followed with probability ``tcfg.p_learner`` at each
+    step). The learner sees through cameras drawn from ``tcfg.camera``, one per swarm for its whole flight."""
     learner.model.eval()
-    p = tcfg.p_learner
-    if tcfg.learner_swarms:
-        alone = torch.rand(tcfg.episodes_per_round, generator=gen) < tcfg.learner_swarms
-        p = torch.where(alone, 1.0, tcfg.p_learner)
-    learner.camera = draw_camera(tcfg.camera, tcfg.vision.render, tcfg.episodes_per_round, cfg.N, gen)
     try:
-        store.fly(learner, cfg, *sample_initial_state(cfg, tcfg.episodes_per_round, gen), p, gen)
+        for flight, swarms in flight_groups(cfg, tcfg, tcfg.episodes_per_round, gen):
+            p = tcfg.p_learner
+            if tcfg.learner_swarms:
+                alone = torch.rand(swarms, generator=gen) < tcfg.learner_swarms
+                p = torch.where(alone, 1.0, tcfg.p_learner)
+            learner.cfg = flight  # the GSO of this group's radius
+            learner.camera = draw_camera(tcfg.camera, tcfg.vision.render, swarms, flight.N, gen)
+            store.fly(learner, flight, *sample_initial_state(flight, swarms, gen), p, gen)
     finally:
-        learner.camera = None  # the controller a training returns sees the renderer's frames
+        learner.cfg, learner.camera = cfg, None  # the controller a training returns sees the renderer's frames
 
 
 # ---------------------------------------------------------------------------------------------
@@ -324,12 +352,12 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
         # Round 0: the expert flies alone; the warm starts (stages 1 and 2) learn from its flights,
         # or, as in the paper, joint K-step BPTT from random weights.
         store = EpisodeStore()
-        store.fly(None, cfg, *sample_initial_state(cfg, tcfg.expert_episodes, gen), 0.0, gen)
+        for flight, swarms in flight_groups(cfg, tcfg, tcfg.expert_episodes, gen):
+            store.fly(None, flight, *sample_initial_state(flight, swarms, gen), 0.0, gen)
         opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
         if tcfg.warm_starts:
-            r, v, u = store.tensors()
-            history.update(stage1(model.cnn, cfg, tcfg, r, v, gen, progress))
-            history["mlp_loss"] = fit_mlp(model, cfg, tcfg, r, v, u, gen, progress)
+            history.update(stage1(model.cnn, cfg, tcfg, store.groups(), gen, progress))
+            history["mlp_loss"] = fit_mlp(model, tcfg, store.groups(), gen, progress)
             check("after stages 1-2")
         else:
             history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,

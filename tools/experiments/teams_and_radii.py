@@ -5,7 +5,7 @@ radii of Tables 2b and 3 (issue: one controller for every team and radius).
     python tools/experiments/teams_and_radii.py --name dagnn_K4 --evaluate data/dagnn/dagnn_K4.pt
 
 Trains the book's DAGNN (``DAGNNTrainConfig()``, K - 1 = 3) with its swarms flown in groups whose N
-is drawn from ``--teams`` and R uniformly from ``--radii`` (``dagnn_training.flight_groups``), or
+is drawn from ``--teams`` and R uniformly from ``--radii`` (``imitation.flight_groups``), or
 evaluates a checkpoint, then flies it on validation episodes (``book.VALIDATION_SEED``: this is a
 choice, so never the test episodes) at every N' of ``--fly-teams`` (R = 1.5 m) and every R of
 ``--fly-radii`` (N = 50), as ``reproduce.flight_config`` flies the tables' columns. Writes

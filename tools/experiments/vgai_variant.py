@@ -75,6 +75,10 @@ def main(argv=None) -> int:
                    help="the motion channel's gap g in steps; 0: one frame, no motion channel (with --motion-features 0)")
     p.add_argument("--warm-starts", choices=("on", "off"), default=None,
                    help="stages 1-2 before the joint training (on: the book's) or joint BPTT from random weights (off)")
+    p.add_argument("--teams", default=None, metavar="N1,N2,...",
+                   help="team sizes the training's swarms fly with, drawn per group (VGAITrainConfig.teams)")
+    p.add_argument("--radii", default=None, metavar="LOW,HIGH",
+                   help="the range of communication radii R (m) drawn per group (VGAITrainConfig.radii)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
@@ -90,6 +94,10 @@ def main(argv=None) -> int:
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
     if args.warm_starts is not None:
         changes["warm_starts"] = args.warm_starts == "on"
+    if args.teams is not None:
+        changes["teams"] = tuple(int(n) for n in args.teams.split(","))
+    if args.radii is not None:
+        changes["radii"] = tuple(float(x) for x in args.radii.split(","))
     cfg, tcfg = FlockConfig(), dataclasses.replace(BASES[args.base], **changes)
     if args.sensor is not None:  # recorded by name, like --channels
         tcfg = dataclasses.replace(tcfg, vision=PAPER_VISION if args.sensor == "paper" else VisionConfig())

@@ -252,7 +252,7 @@ prose("In these {E} episodes the expert brings a pair closer than {d:g} m in {k}
 # and use "Open Controls" → Animations to replay.
 
 # %%
-from vgai_lite.viz3d import iframe, swarm_scene_html
+from vgai_lite.lab.viz3d import iframe, swarm_scene_html
 
 flight = rollout(ExpertController(cfg), cfg, r0[:1], v0[:1])
 scene = swarm_scene_html(flight, cfg, every=pick(4, 50))

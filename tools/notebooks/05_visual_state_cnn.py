@@ -379,7 +379,7 @@ else:
     gen = torch.Generator().manual_seed(0)
     store = EpisodeStore()
     store.fly(None, cfg, *sample_initial_state(cfg, pick(20, 1), gen), 0.0, gen)
-    r_tr, v_tr, _ = store.tensors()
+    flights = store.groups()  # the expert's flights, of one configuration (cfg)
 
 
     def circular(cnn):
@@ -395,7 +395,7 @@ else:
         torch.manual_seed(0)
         cnn = make(tc.new_model().cnn)
         t0 = time.perf_counter()
-        fit_state_estimator(cnn, cfg, tc, r_tr, v_tr, torch.Generator().manual_seed(1), progress=False)
+        fit_state_estimator(cnn, cfg, tc, flights, torch.Generator().manual_seed(1), progress=False)
         with torch.no_grad():
             est = cnn.estimate_local_features(imgs.flatten(0, 1))
             turned = cnn.estimate_local_features(torch.roll(imgs.flatten(0, 1), half, dims=-1))

@@ -7,7 +7,7 @@
   the book's prose   ``findings`` (sentences computed from records), ``paper_vs_book`` (the table of choices)
   the course         ``exercises``, ``method_exercises``, ``experiment_exercises`` (the checks),
                      ``course`` (student copies, grading)
-  tooling            ``benchmark``, ``website``, ``chromium`` (headless Chromium over DevTools), ``pdf``
+  tooling            ``viz3d`` (the 3-D flight player, meshcat), ``benchmark``, ``website``, ``chromium`` (headless Chromium over DevTools), ``pdf``
                      (the book printed), ``cli`` (``python -m vgai_lite COMMAND``)
 
 Nothing in ``vgai_lite`` imports from here.

@@ -147,7 +147,7 @@ def run_vgai_training(steps: int = 30, episodes: int = 4, tcfg=None) -> dict:
     collect_expert = (time.perf_counter() - start) / episodes
     model = tcfg.new_model()
     start = time.perf_counter()
-    fit_state_estimator(model.cnn, cfg, dataclasses.replace(tcfg, warm_steps=steps), r, v, gen, progress=False)
+    fit_state_estimator(model.cnn, cfg, dataclasses.replace(tcfg, warm_steps=steps), store.groups(), gen, progress=False)
     stage1 = (time.perf_counter() - start) / steps
     opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
     model.train()

@@ -26,7 +26,7 @@ FORMAT = "vgai-lite-stage1/3"
 
 STAGE1_FIELDS = ("F", "cnn_widths", "cnn_hidden", "vision", "expert_episodes", "warm_steps", "warm_states",
                  "lr", "early_steps", "early_share", "seed", "synthetic_share", "synthetic_speeds",
-                 "motion_features", "camera")
+                 "motion_features", "camera", "teams", "radii", "group_swarms")
 """The training configuration's fields stage 1 depends on (with the flight configuration)."""
 
 
@@ -44,7 +44,8 @@ def stage1_file(folder: Union[str, Path], cfg: FlockConfig, tcfg: VGAITrainConfi
 def cached(folder: Union[str, Path]) -> Callable:
     """A stage-1 function for ``train_vgai(..., stage1=cached(folder))`` (``fit_stage1``'s signature)."""
 
-    def stage1(cnn, cfg: FlockConfig, tcfg: VGAITrainConfig, r, v, gen: torch.Generator, progress: bool = True) -> dict:
+    def stage1(cnn, cfg: FlockConfig, tcfg: VGAITrainConfig, flights: list, gen: torch.Generator,
+               progress: bool = True) -> dict:
         path = stage1_file(folder, cfg, tcfg)
         if path.is_file():
             payload = torch.load(path, map_location="cpu", weights_only=True)
@@ -52,7 +53,7 @@ def cached(folder: Union[str, Path]) -> Callable:
             cnn.eval()
             gen.set_state(payload["generator"])
             return {**payload["record"], "stage1_cached": path.name}
-        record = fit_stage1(cnn, cfg, tcfg, r, v, gen, progress)
+        record = fit_stage1(cnn, cfg, tcfg, flights, gen, progress)
         atomic_save({"identity_json": json.dumps({"format": FORMAT, **stage1_identity(cfg, tcfg)}, sort_keys=True),
                      "state_dict": weights(cnn), "generator": gen.get_state(), "record": record}, path)
         return record

@@ -13,9 +13,9 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from .config import FlockConfig
-from .flocking import Trajectory
-from .render import RenderConfig
+from ..config import FlockConfig
+from ..flocking import Trajectory
+from ..render import RenderConfig
 
 
 @contextmanager
