@@ -2,6 +2,7 @@
 
 import importlib
 
+import math
 import pytest
 import torch
 
@@ -277,3 +278,17 @@ def test_a_variance_near_the_flock_threshold_prints_so_that_its_label_can_be_rea
     for bad in (float("nan"), -1e-3):
         with pytest.raises(ValueError, match="non-negative"):
             variance_text(bad)
+
+
+def test_the_noise_that_breaks_a_flock_is_the_smallest_that_does_not_flock_whatever_the_keys_order():
+    from vgai_lite.lab.findings import noise_that_breaks
+
+    def cell(var):
+        return {"velocity_variance_median": {"5s": var}, "share_connected_at_end": 1.0, "flocking_horizon_s": 5.0}
+
+    settings = {"clean": cell(5e-4), "noise0.1": cell(0.3), "noise0.01": cell(1e-3), "noise0.05": cell(0.2),
+                "noise0.02": cell(4e-3), "blur2.8": cell(0.5)}
+    assert noise_that_breaks(settings) == 0.02
+    assert noise_that_breaks({"noise0.01": cell(1e-3)}) == math.inf
+    with pytest.raises(ValueError, match="no noise setting"):
+        noise_that_breaks({"clean": cell(1e-3), "blur1": cell(1.0)})

@@ -687,8 +687,7 @@ prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.
       vn2=n02["relative_cost_mean"], vn=noisy["relative_cost_mean"], s=T["image_noise_sigma"],
       vnc=noisy["share_connected_at_end"], vcf=flock_word(clean["VGAI"]), blf=flock_word(blur),
       deadf=flock_word(dead), n2f=flock_word(n02), vnf=flock_word(noisy),
-      clean_breaks=min(float(k[5:]) for k, x in cam_eval["clean frames (no camera), gray + depth"].items()
-                       if k.startswith("noise") and not x["flocked"]),
+      clean_breaks=findings.noise_that_breaks(cam_eval["clean frames (no camera), gray + depth"]),
       blw=cost_word[findings.compare(blur, clean["VGAI"])], deadw=cost_word[findings.compare(dead, clean["VGAI"])],
       n2w=cost_word[findings.compare(n02, clean["VGAI"])],
       p05=robustness.find(results, "DAGNN", (("position_noise", 0.05),))["relative_cost_mean"],

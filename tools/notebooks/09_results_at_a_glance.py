@@ -23,7 +23,7 @@ from vgai_lite.book import DATA_DIR, TEST_SEED, prose
 from vgai_lite.evaluate import as_safe_as_expert, flocked
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.lab.reproduce import load_results
-from vgai_lite.lab.findings import compare, needs
+from vgai_lite.lab.findings import compare, needs, noise_that_breaks
 from vgai_lite.lab.runs import (CAMERA_SEED_RUNS, CLEAN_SEED_RUNS, LEAVE_ONE_OUT, DAGNN_RUNS, PAPER_SEEDS, VGAI_RUNS,
                                  chosen_camera_runs, how_trained, training_minutes)
 from vgai_lite.vgai_config import PAPER as PAPER_T
@@ -219,7 +219,7 @@ authors = f"noise{10 / 255:.4g}"
 cams_seed1 = load(f"experiments/{chosen_camera_runs()['gray only']}_seed1_cameras.json")["settings"]
 cam_flocked = sum(flocked(c[k]) for c in cams.values() for k in ("clean", authors))
 clean_cams = load(f"experiments/{CLEAN_SEED_RUNS[0]}_cameras.json")["settings"]
-clean_breaks = min(float(k[5:]) for k, x in clean_cams.items() if k.startswith("noise") and not flocked(x))
+clean_breaks = noise_that_breaks(clean_cams)
 expert_200 = load("experiments/expert_stability.json")["teams"]["200"]
 does = lambda rec: "does" if flocked(rec) else "does not"
 items = [

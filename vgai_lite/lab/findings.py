@@ -105,3 +105,13 @@ def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) 
            CANNOT_TELL: "cannot be told from ours: at least one step is within its intervals"}[verdict]
     steps = f"; step by step, {steps_text(cells, labels)}" if verdict != HOLDS and len(cells) > 2 else ""
     return f"{claim}: {how} ({series_text(cells, labels)}{steps})."
+
+
+def noise_that_breaks(settings: dict) -> float:
+    """The smallest sensor noise sigma at which a controller flown through fixed cameras no longer flocks
+    (``settings``: a camera record's cells by setting, the noise ones keyed ``noise<sigma>``, e.g.
+    ``data/experiments/vgai_clean_seed0_cameras.json``); infinity if it flocks at every noise flown."""
+    noises = {k: x for k, x in settings.items() if k.startswith("noise")}
+    if not noises:
+        raise ValueError(f"noise_that_breaks: no noise setting among {sorted(settings)}")
+    return min((float(k[5:]) for k, x in noises.items() if not flocked(x)), default=math.inf)
