@@ -3,6 +3,7 @@ radii of Tables 2b and 3 (issue: one controller for every team and radius).
 
     python tools/experiments/teams_and_radii.py --name dagnn_teams --teams 50,100,200 --radii 1.0,2.0
     python tools/experiments/teams_and_radii.py --name dagnn_K4 --evaluate data/dagnn/dagnn_K4.pt
+    python tools/experiments/teams_and_radii.py --name vgai_depthcam_nearest49 --evaluate data/experiments/vgai_depthcam.pt --nearest 49
 
 Trains the book's DAGNN (``DAGNNTrainConfig()``, K - 1 = 3) with its swarms flown in groups whose N
 is drawn from ``--teams`` and R uniformly from ``--radii`` (``imitation.flight_groups``), or
@@ -11,11 +12,14 @@ choice, so never the test episodes) at every N' of ``--fly-teams`` (R = 1.5 m) a
 ``--fly-radii`` (N = 50), as ``reproduce.flight_config`` flies the tables' columns. Writes
 ``data/experiments/NAME_teams.json`` (and the checkpoint ``NAME.pt`` when it trains): per cell the
 relative cost with its interval, the velocity variance at 5 s, connectivity at 5 s, closest approaches.
+``--nearest K`` flies a VGAI with a renderer that draws only each drone's K nearest drones
+(``RenderConfig.nearest``): in a team larger than it trained in, the panorama it trained on.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -45,11 +49,14 @@ def main(argv=None) -> int:
     p.add_argument("--fly-radii", default="1.0,2.0")
     p.add_argument("--episodes", type=int, default=10, help="validation episodes per cell")
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--nearest", type=int, default=None, metavar="K",
+                   help="a VGAI's renderer draws only each drone's K nearest drones (RenderConfig.nearest; "
+                        "default: as trained, every drone)")
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
     command = " ".join(["python tools/experiments/teams_and_radii.py"] + (argv or sys.argv[1:]))
     folder = DATA_DIR / "experiments"
-    out = {"command": command, "cells": {}}
+    out = {"command": command, "nearest": args.nearest, "cells": {}}
     if args.evaluate:
         ckpt = Path(args.evaluate)
         controller = load_controller(ckpt)
@@ -66,6 +73,9 @@ def main(argv=None) -> int:
         for table, column in cells:
             flight = flight_config(rc, table, column)
             flown = load_controller(ckpt, cfg=flight)
+            if args.nearest is not None:  # the panorama of a VGAI: each drone's K nearest only
+                render = dataclasses.replace(flown.vision.render, nearest=args.nearest)
+                flown.vision = dataclasses.replace(flown.vision, render=render)
             res = relative_cost(flown, flight, episodes=args.episodes, seed=VALIDATION_SEED, name=args.name)
             print(f"{table} = {column}: {res}", flush=True)
             out["cells"][f"{table}={column}"] = {"config": {"N": flight.N, "R": flight.R}, **res.summary()}

@@ -22,11 +22,14 @@ from ..config import FlockConfig
 from ..controllers import expert_control
 from ..evaluate import relative_cost
 from ..flocking import sample_initial_state, step
+from ..aggregation import AggregationBuffer
+from ..graphs import adjacency, gso
 from ..imitation import ROUND_CHECK_SEED_OFFSET, EpisodeStore
 from ..learned_controllers import VGAIController
 from ..physics import raycast_depth
 from ..render import RenderConfig, egocentric_depth, render_egocentric, render_topdown
 from ..camera import draw_camera
+from ..vision import camera_input
 from ..vgai_config import BOOK, VGAITrainConfig
 from ..vgai_training import fit_state_estimator, joint_loss, sample_windows, train_vgai, window_batch
 
@@ -129,6 +132,37 @@ def run_render_scaling(nearest: int = 49, teams=SCALING_TEAMS, swarms: int = 4, 
     return rows
 
 
+@torch.no_grad()
+def run_flight_profile(teams=(50, 200), swarms: int = 2, nearest: int = 49, min_seconds: float = 0.5,
+                       device=None) -> list[dict]:
+    """Where one step of a VGAI flight goes, against the team size: microseconds per drone and step of
+    each part (the book's VGAI, ``BOOK``, untrained: the time does not depend on the weights), with the
+    panorama drawn for every drone and for each drone's ``nearest`` nearest. The O(N^2) parts are those
+    whose time per drone grows with N: the GSO (every pair's distance), the expert's action of eq. 2 (the
+    centralized teacher, flown for the cost) and the panorama drawing every drone."""
+    model = BOOK.new_model().to(device).eval()
+    culled = dataclasses.replace(BOOK.vision, render=dataclasses.replace(BOOK.vision.render, nearest=nearest))
+    rows = []
+    for N in teams:
+        cfg = FlockConfig(N=N, init_method="repair" if N >= 100 else "reject")
+        r, v = sample_initial_state(cfg, swarms, torch.Generator().manual_seed(0), device=device)
+        images = camera_input(BOOK.vision, cfg, r, r, None)
+        X = model.features(images)
+        S = gso(adjacency(r, cfg.R), BOOK.gso)
+        buffer = AggregationBuffer(BOOK.K)
+        parts = {"panorama and motion frame, every drone": lambda: camera_input(BOOK.vision, cfg, r, r, None),
+                 f"panorama and motion frame, {nearest} nearest": lambda: camera_input(culled, cfg, r, r, None),
+                 "CNN": lambda: model.features(images),
+                 "GSO S(t) (every pair's distance)": lambda: gso(adjacency(r, cfg.R), BOOK.gso),
+                 "aggregation (eq. 6) and MLP": lambda: model.mlp(buffer.push(X, S)),
+                 "the expert's action (eq. 2, for the cost)": lambda: expert_control(r, v, cfg),
+                 "physics step": lambda: step(r, v, torch.zeros_like(v), cfg)}
+        for part, fn in parts.items():
+            n, sec = _time(fn, min_seconds)
+            rows.append({"N": N, "part": part, "us_per_drone_step": 1e6 * sec / (n * swarms * N)})
+    return rows
+
+
 CHECK_EPISODES = inspect.signature(train_vgai).parameters["check_episodes"].default
 """Episodes of each round check of a training (``train_vgai``'s default)."""
 
@@ -223,3 +257,9 @@ def main(args=None) -> None:
     first, last = srows[0], srows[-1]
     print(f"N = {last['N']} against N = {first['N']}: {last['all_us'] / first['all_us']:.2f}x every drone, "
           f"{last['nearest_us'] / first['nearest_us']:.2f}x the {nearest} nearest")
+    prof = run_flight_profile(nearest=nearest)
+    small, large = min(x["N"] for x in prof), max(x["N"] for x in prof)
+    print(f"\none step of a VGAI flight (the book's), microseconds per drone: N = {small} / N' = {large}")
+    for part in dict.fromkeys(x["part"] for x in prof):
+        a, b = (next(x["us_per_drone_step"] for x in prof if x["part"] == part and x["N"] == n) for n in (small, large))
+        print(f"{part:46s} {a:8.1f} / {b:8.1f}  ({b / a:.2f}x)")
