@@ -21,9 +21,10 @@ N_LOCAL_FEATURES = 6
 FEATURE_NAMES = ("sum dv_x", "sum dv_y", "sum r_x/r^4", "sum r_y/r^4", "sum r_x/r^2", "sum r_y/r^2")
 
 
-def local_features(r: torch.Tensor, v: torch.Tensor, R: float) -> torch.Tensor:
+def local_features(r: torch.Tensor, v: torch.Tensor, R: float, per_neighbour: bool = False) -> torch.Tensor:
     """The 6 exact local features of every agent: the state matrix X(t) of eq. 4, one row x_i(t)
-    per agent. r, v: (B, N, 2) -> X: (B, N, 6).
+    per agent. r, v: (B, N, 2) -> X: (B, N, 6). ``per_neighbour``: each sum divided by the agent's
+    number of neighbours |N_i| (at least 1), a mean that does not grow with the density of the team.
 
     Order: [sum (v_i - v_j) (x, y), sum r_ij/||r_ij||^4 (x, y), sum r_ij/||r_ij||^2 (x, y)].
     ||r_ij|| is floored at config.DISTANCE_FLOOR (1 mm), as in the expert's potential: coincident
@@ -37,7 +38,8 @@ def local_features(r: torch.Tensor, v: torch.Tensor, R: float) -> torch.Tensor:
     dv = A.sum(-1, keepdim=True) * v - A @ v
     rep4 = torch.stack(((inv4 * dx).sum(-1), (inv4 * dy).sum(-1)), dim=-1)
     rep2 = torch.stack(((inv2 * dx).sum(-1), (inv2 * dy).sum(-1)), dim=-1)
-    return torch.cat((dv, rep4, rep2), dim=-1)
+    X = torch.cat((dv, rep4, rep2), dim=-1)
+    return X / A.sum(-1, keepdim=True).clamp(min=1.0) if per_neighbour else X
 
 
 def signed_log(x: torch.Tensor) -> torch.Tensor:

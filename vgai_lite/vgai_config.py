@@ -88,6 +88,9 @@ class VGAITrainConfig:
             training step draws the group of a random stored episode, with 1 / N-scaled batches
             (``per_team``): every step sees about as many drone images. Empty (the paper's): every swarm
             flies the training's configuration; the authors' released code draws R per sample.
+        feature_means: the local features the CNN learns to read (stage 1, and stage 3's state-estimation
+            loss) are eq. 4's sums divided by the number of neighbours (``local_features(per_neighbour=True)``):
+            means, which do not grow with the team's density (False: the sums, the DAGNN's).
     """
 
     F: int = 24
@@ -98,7 +101,8 @@ class VGAITrainConfig:
     cnn_hidden: int = 64
     vision: VisionConfig = PAPER_VISION
     warm_starts: bool = False
-    LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True, "teams": [], "radii": [], "group_swarms": 8}
+    LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True, "teams": [], "radii": [], "group_swarms": 8,
+                                     "feature_means": False}
     """Fields added after files were written, with the value every file written before them had (until
     2026-12-04 every VGAI training warm-started; until 2026-12-06 none drew N or R)."""
     expert_episodes: int = 40
@@ -125,6 +129,7 @@ class VGAITrainConfig:
     teams: tuple = ()
     radii: tuple = ()
     group_swarms: int = 8
+    feature_means: bool = False
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
@@ -143,8 +148,9 @@ class VGAITrainConfig:
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"VGAITrainConfig: {name} is a probability, in [0, 1]; got {getattr(self, name)!r}")
         check_flight_mix("VGAITrainConfig", self.teams, self.radii, self.group_swarms)
-        if not isinstance(self.warm_starts, bool):
-            raise ValueError(f"VGAITrainConfig: warm_starts must be True or False, got {self.warm_starts!r}")
+        if not isinstance(self.warm_starts, bool) or not isinstance(self.feature_means, bool):
+            raise ValueError(f"VGAITrainConfig: warm_starts and feature_means must be True or False, "
+                             f"got {self.warm_starts!r}, {self.feature_means!r}")
         if not self.lr > 0 or not self.aux_weight >= 0:
             raise ValueError(f"VGAITrainConfig: lr must be > 0 and aux_weight >= 0, got {self.lr!r}, {self.aux_weight!r}")
         lo, hi = self.synthetic_speeds

@@ -76,9 +76,10 @@ def per_team(swarms: int, cfg: FlockConfig, flight: FlockConfig) -> int:
 # Stage 1: visual state estimation (section 3.3; notebook 05)
 
 
-def feature_scale(flights: list) -> tuple[torch.Tensor, torch.Tensor]:
+def feature_scale(flights: list, per_neighbour: bool = False) -> tuple[torch.Tensor, torch.Tensor]:
     """Mean and spread of the 6 exact local features over every agent's stored states (``Flights``): (6,), (6,)."""
-    X = torch.cat([local_features(f.r.flatten(0, 1), f.v.flatten(0, 1), f.cfg.R).flatten(0, 1) for f in flights])
+    X = torch.cat([local_features(f.r.flatten(0, 1), f.v.flatten(0, 1), f.cfg.R, per_neighbour).flatten(0, 1)
+                   for f in flights])
     return X.mean(0), X.std(0).clamp(min=1e-6)
 
 
@@ -103,12 +104,12 @@ def estimation_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v
     cam = draw_camera(tcfg.camera, vision.render, states, cfg.N, gen)
     camera = cam.at(0) if cam is not None else None
     if tcfg.synthetic_share <= 0:
-        return stored_images(vision, cfg, r, v, e, t, camera), local_features(r[t, e], v[t, e], cfg.R)
+        return stored_images(vision, cfg, r, v, e, t, camera), local_features(r[t, e], v[t, e], cfg.R, tcfg.feature_means)
     synth = (torch.rand(states, generator=gen) < tcfg.synthetic_share)[:, None, None]
     vs = torch.where(synth, synthetic_velocities(v[t, e], tcfg.synthetic_speeds, gen), v[t, e])
     before = torch.where(synth, flown_backwards(r[t, e], vs, vision.motion_gap, cfg.Ts),
                          positions_before(vision, cfg, r, v, e, t))
-    return camera_input(vision, cfg, r[t, e], before, camera), local_features(r[t, e], vs, cfg.R)
+    return camera_input(vision, cfg, r[t, e], before, camera), local_features(r[t, e], vs, cfg.R, tcfg.feature_means)
 
 
 def estimation_loss(cnn: VisualCNN, X: torch.Tensor, x_exact: torch.Tensor) -> torch.Tensor:
@@ -124,7 +125,7 @@ def fit_state_estimator(cnn: VisualCNN, cfg: FlockConfig, tcfg: VGAITrainConfig,
     features of every agent from its own images (``tcfg.vision``), on stored flights (a list of
     ``imitation.Flights``, e.g. ``EpisodeStore.groups()``) of a training in ``cfg``: ``tcfg.warm_steps``
     Adam steps on ``estimation_batch``, each of one group (``pick``). Returns the L1 loss per step."""
-    x_mean, x_std = feature_scale(flights)
+    x_mean, x_std = feature_scale(flights, tcfg.feature_means)
     if cnn.motion_features:  # the odd velocity estimates are 0 when nothing moves, so is their offset
         x_mean[:2] = 0.0
     cnn.aux_mean.copy_(x_mean), cnn.aux_std.copy_(x_std)
@@ -252,7 +253,7 @@ def window_batch(cfg: FlockConfig, tcfg: VGAITrainConfig, r: torch.Tensor, v: to
     return {"images": images.view(M, K, *images.shape[1:]),
             "S": gso(adjacency(r[tau_c, ee], cfg.R), tcfg.gso).view(M, K, cfg.N, cfg.N),
             "u_star": u[t_end, e], "valid": tau >= 0,
-            "x_exact": local_features(r[tau_c, ee], v[tau_c, ee], cfg.R).view(M, K, cfg.N, N_LOCAL_FEATURES)}
+            "x_exact": local_features(r[tau_c, ee], v[tau_c, ee], cfg.R, tcfg.feature_means).view(M, K, cfg.N, N_LOCAL_FEATURES)}
 
 
 def joint_loss(model: VGAIModel, tcfg: VGAITrainConfig, w: dict) -> torch.Tensor:

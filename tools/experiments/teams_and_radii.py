@@ -46,6 +46,7 @@ def main(argv=None) -> int:
     p.add_argument("--radii", default="", help="low,high: R (m) drawn uniformly per group, e.g. 1.0,2.0")
     p.add_argument("--K", type=int, default=None, help="the DAGNN's taps (K - 1 exchanges; default DAGNNTrainConfig's 4)")
     p.add_argument("--seed", type=int, default=None, help="the training's seed (default DAGNNTrainConfig's 0)")
+    p.add_argument("--feature-transform", default=None, help="the DAGNN's feature transform (none, signed_log, mean)")
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: fly this checkpoint")
     p.add_argument("--fly-teams", default="50,100,200")
     p.add_argument("--fly-radii", default="1.0,2.0")
@@ -65,7 +66,8 @@ def main(argv=None) -> int:
     else:
         ckpt = folder / f"{args.name}.pt"
         tcfg = DAGNNTrainConfig(teams=_numbers(args.teams, int), radii=_numbers(args.radii, float),
-                                **{k: v for k, v in (("K", args.K), ("seed", args.seed)) if v is not None})
+                                **{k: v for k, v in (("K", args.K), ("seed", args.seed),
+                                                              ("feature_transform", args.feature_transform)) if v is not None})
         with Provenance(command) as prov:
             controller, hist = train_dagnn(FlockConfig(), tcfg, checkpoint=ckpt, progress=False)
         out.update(train_config=tcfg.to_dict(), train_seconds=round(hist["seconds"], 1),

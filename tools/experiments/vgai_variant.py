@@ -79,6 +79,8 @@ def main(argv=None) -> int:
                    help="team sizes the training's swarms fly with, drawn per group (VGAITrainConfig.teams)")
     p.add_argument("--radii", default=None, metavar="LOW,HIGH",
                    help="the range of communication radii R (m) drawn per group (VGAITrainConfig.radii)")
+    p.add_argument("--feature-means", action="store_true",
+                   help="the CNN learns the local features as means over neighbours (VGAITrainConfig.feature_means)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
@@ -94,6 +96,8 @@ def main(argv=None) -> int:
                                  ("learner_swarms", args.learner_swarms)) if v is not None}
     if args.warm_starts is not None:
         changes["warm_starts"] = args.warm_starts == "on"
+    if args.feature_means:
+        changes["feature_means"] = True
     if args.teams is not None:
         changes["teams"] = tuple(int(n) for n in args.teams.split(","))
     if args.radii is not None:

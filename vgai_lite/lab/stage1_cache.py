@@ -26,7 +26,8 @@ FORMAT = "vgai-lite-stage1/3"
 
 STAGE1_FIELDS = ("F", "cnn_widths", "cnn_hidden", "vision", "expert_episodes", "warm_steps", "warm_states",
                  "lr", "early_steps", "early_share", "seed", "synthetic_share", "synthetic_speeds",
-                 "motion_features", "camera", "teams", "radii", "group_swarms")
+                 "motion_features", "camera", "teams", "radii", "group_swarms",
+                 "feature_means")
 """The training configuration's fields stage 1 depends on (with the flight configuration)."""
 
 
