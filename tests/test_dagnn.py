@@ -187,3 +187,33 @@ def test_a_short_training_over_teams_and_radii_learns_from_every_group(tmp_path)
 def test_teams_and_radii_must_be_drones_and_a_range(bad):
     with pytest.raises(ValueError, match="DAGNNTrainConfig"):
         DAGNNTrainConfig(**bad)
+
+
+def test_local_features_per_neighbour_are_the_sums_divided_by_the_degree_and_do_not_grow_with_density():
+    """per_neighbour: each of eq. 4's sums over N_i divided by |N_i| (1 for a drone without neighbours, whose
+    sums are 0). Doubling every neighbour (a second drone at the same place and velocity) doubles the sums
+    and leaves the means unchanged."""
+    from vgai_lite.features import local_features
+    from vgai_lite.graphs import adjacency
+    gen = torch.Generator().manual_seed(0)
+    r, v = torch.randn(2, 7, 2, generator=gen), torch.randn(2, 7, 2, generator=gen)
+    r[0, 6] = torch.tensor([50.0, 50.0])  # alone
+    sums, means = local_features(r, v, 1.5), local_features(r, v, 1.5, per_neighbour=True)
+    degree = adjacency(r, 1.5).sum(-1, keepdim=True)
+    torch.testing.assert_close(means * degree.clamp(min=1), sums)
+    assert torch.equal(means[0, 6], torch.zeros(6))
+    i = 0  # drone 0 with its neighbours doubled (offset by 1 mm, beyond the distance floor)
+    r2 = torch.cat((r[:1], r[:1, 1:] + 1e-3), 1)
+    v2 = torch.cat((v[:1], v[:1, 1:]), 1)
+    torch.testing.assert_close(local_features(r2, v2, 1.5, per_neighbour=True)[0, i],
+                               local_features(r[:1], v[:1], 1.5, per_neighbour=True)[0, i], rtol=0.05, atol=0.05)
+
+
+def test_a_dagnn_with_mean_features_sees_the_sums_divided_by_the_degree():
+    from vgai_lite.features import local_features
+    model = AggregationMLP(3, 6, (8,))
+    cfg = FlockConfig(N=12)
+    r, v = sample_initial_state(cfg, 2, torch.Generator().manual_seed(0))
+    ctrl = DAGNNController(model, cfg, feature_transform="mean")
+    torch.testing.assert_close(ctrl.features(r, v), local_features(r, v, cfg.R, per_neighbour=True))
+    assert not torch.allclose(ctrl.features(r, v), local_features(r, v, cfg.R))

@@ -494,3 +494,20 @@ def test_stored_flights_are_joined_per_configuration_and_never_across_them():
     torch.testing.assert_close(groups[0].u[:, 2:], store.u[2])
     with pytest.raises(ValueError, match="groups()"):
         store.tensors()
+
+
+def test_with_feature_means_the_cnn_learns_to_read_the_means_in_stage_one_and_in_stage_three():
+    from vgai_lite.features import local_features
+    from vgai_lite.imitation import EpisodeStore
+    from vgai_lite.vgai_training import estimation_batch
+    cfg, tcfg = FlockConfig(N=12, T=20), dataclasses.replace(MINI, feature_means=True)
+    store, gen = EpisodeStore(), torch.Generator().manual_seed(0)
+    store.fly(None, cfg, *sample_initial_state(cfg, 2, gen), 0.0, gen)
+    r, v, u = store.tensors()
+    e, t = torch.tensor([0, 1]), torch.tensor([3, 15])
+    w = window_batch(cfg, tcfg, r, v, u, e, t)
+    torch.testing.assert_close(w["x_exact"][:, -1], local_features(r[t, e], v[t, e], cfg.R, per_neighbour=True))
+    _, x = estimation_batch(cfg, tcfg, r, v, torch.Generator().manual_seed(1))
+    _, x_sums = estimation_batch(cfg, MINI, r, v, torch.Generator().manual_seed(1))
+    assert x.shape == x_sums.shape and not torch.allclose(x, x_sums)
+    assert torch.all((x * x_sums) >= -1e-9)  # a mean has its sum's sign
