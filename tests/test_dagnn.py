@@ -214,6 +214,6 @@ def test_a_dagnn_with_mean_features_sees_the_sums_divided_by_the_degree():
     model = AggregationMLP(3, 6, (8,))
     cfg = FlockConfig(N=12)
     r, v = sample_initial_state(cfg, 2, torch.Generator().manual_seed(0))
-    ctrl = DAGNNController(model, cfg, feature_transform="mean")
+    ctrl = DAGNNController(model, cfg, feature_transform="per_neighbour")
     torch.testing.assert_close(ctrl.features(r, v), local_features(r, v, cfg.R, per_neighbour=True))
     assert not torch.allclose(ctrl.features(r, v), local_features(r, v, cfg.R))

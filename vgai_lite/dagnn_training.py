@@ -36,7 +36,7 @@ class DAGNNTrainConfig:
         gso: graph shift operator (see graphs.gso).
         feature_transform: "none" (default) feeds the features as they are (standardised by the
             MLP's first step); "signed_log" compresses the 1/r^3-sized repulsion features first
-            (it imitates worse: notebook 03 compares both); "mean" divides each sum by the degree.
+            (it imitates worse: notebook 03 compares both); "per_neighbour" divides each sum by the degree.
         rounds: DAgger rounds. Round 0 follows the expert only (the learner is untrained).
         episodes_per_round: new episodes collected per round.
         p_learner: probability of following the learner at each step, rounds >= 1 (paper: 0.33).

@@ -27,7 +27,7 @@ from .graphs import DEFAULT_GSO, GSO_KINDS, adjacency, gso
 from .models import AggregationMLP, VGAIModel
 from .vision import VisionConfig, camera_input, flown_backwards
 
-FEATURE_TRANSFORMS = ("signed_log", "none", "mean")
+FEATURE_TRANSFORMS = ("signed_log", "none", "per_neighbour")
 
 
 def _check_gso(gso_kind: str) -> None:
@@ -81,10 +81,10 @@ class DAGNNController(_Learned):
         self.buffer.reset()
 
     def features(self, r: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-        """X(t), (B, N, 6): the exact local features; "signed_log" compresses them, "mean" divides each sum by
+        """X(t), (B, N, 6): the exact local features; "signed_log" compresses them, "per_neighbour" divides each sum by
         the drone's number of neighbours (eq. 2's alignment is N (vbar - v_i), the sum n_i (v_i - vbar_i): the
         gain from sum to action depends on the degree n_i, from mean to action it does not)."""
-        X = local_features(r, v, self.cfg.R, per_neighbour=self.feature_transform == "mean")
+        X = local_features(r, v, self.cfg.R, per_neighbour=self.feature_transform == "per_neighbour")
         return signed_log(X) if self.feature_transform == "signed_log" else X
 
     def act(self, Z: torch.Tensor) -> torch.Tensor:

@@ -12,6 +12,7 @@ choice, so never the test episodes) at every N' of ``--fly-teams`` (R = 1.5 m) a
 ``--fly-radii`` (N = 50), as ``reproduce.flight_config`` flies the tables' columns. Writes
 ``data/experiments/NAME_teams.json`` (and the checkpoint ``NAME.pt`` when it trains): per cell the
 relative cost with its interval, the velocity variance at 5 s, connectivity at 5 s, closest approaches.
+``--test`` flies a controller chosen on them on the test episodes instead (reporting only).
 ``--nearest K`` flies a VGAI with a renderer that draws only each drone's K nearest drones
 (``RenderConfig.nearest``): in a team larger than it trained in, the panorama it trained on.
 """
@@ -30,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from vgai_lite import DAGNNTrainConfig, FlockConfig, load_controller, relative_cost, train_dagnn  # noqa: E402
-from vgai_lite.book import DATA_DIR, VALIDATION_SEED  # noqa: E402
+from vgai_lite.book import DATA_DIR, TEST_SEED, VALIDATION_SEED  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.reproduce import ReproduceConfig, flight_config  # noqa: E402
 
@@ -46,11 +47,13 @@ def main(argv=None) -> int:
     p.add_argument("--radii", default="", help="low,high: R (m) drawn uniformly per group, e.g. 1.0,2.0")
     p.add_argument("--K", type=int, default=None, help="the DAGNN's taps (K - 1 exchanges; default DAGNNTrainConfig's 4)")
     p.add_argument("--seed", type=int, default=None, help="the training's seed (default DAGNNTrainConfig's 0)")
-    p.add_argument("--feature-transform", default=None, help="the DAGNN's feature transform (none, signed_log, mean)")
+    p.add_argument("--feature-transform", default=None, help="the DAGNN's feature transform (none, signed_log, per_neighbour)")
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: fly this checkpoint")
     p.add_argument("--fly-teams", default="50,100,200")
     p.add_argument("--fly-radii", default="1.0,2.0")
     p.add_argument("--episodes", type=int, default=10, help="validation episodes per cell")
+    p.add_argument("--test", action="store_true",
+                   help="report a controller chosen before on the test episodes (book.TEST_SEED; writes NAME_teams_test.json)")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--nearest", type=int, default=None, metavar="K",
                    help="a VGAI's renderer draws only each drone's K nearest drones (RenderConfig.nearest; "
@@ -72,7 +75,7 @@ def main(argv=None) -> int:
             controller, hist = train_dagnn(FlockConfig(), tcfg, checkpoint=ckpt, progress=False)
         out.update(train_config=tcfg.to_dict(), train_seconds=round(hist["seconds"], 1),
                    round_checks=hist["rounds"], training=prov.record())
-    rc = ReproduceConfig()
+    rc, seed = ReproduceConfig(), TEST_SEED if args.test else VALIDATION_SEED
     cells = [("N", n) for n in _numbers(args.fly_teams, int)] + [("R", r) for r in _numbers(args.fly_radii, float)]
     with Provenance(command) as prov:
         for table, column in cells:
@@ -81,11 +84,11 @@ def main(argv=None) -> int:
             if args.nearest is not None:  # the panorama of a VGAI: each drone's K nearest only
                 render = dataclasses.replace(flown.vision.render, nearest=args.nearest)
                 flown.vision = dataclasses.replace(flown.vision, render=render)
-            res = relative_cost(flown, flight, episodes=args.episodes, seed=VALIDATION_SEED, name=args.name)
+            res = relative_cost(flown, flight, episodes=args.episodes, seed=seed, name=args.name)
             print(f"{table} = {column}: {res}", flush=True)
             out["cells"][f"{table}={column}"] = {"config": {"N": flight.N, "R": flight.R}, **res.summary()}
-    out["evaluation"] = prov.record(checkpoint=ckpt, seed=VALIDATION_SEED, episodes=args.episodes)
-    path = folder / f"{args.name}_teams.json"
+    out["evaluation"] = prov.record(checkpoint=ckpt, seed=seed, episodes=args.episodes)
+    path = folder / f"{args.name}_teams{'_test' if args.test else ''}.json"
     path.write_text(json.dumps(out, indent=1) + "\n")
     print("wrote", path)
     return 0

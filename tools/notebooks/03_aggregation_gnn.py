@@ -422,6 +422,50 @@ prose("So a student who asks the DAGNN to flock at N' = 200 asks more than its t
       t=stab["dagnn_teams"]["measured_factor"], ts=sign(stab["dagnn_teams"]["measured_factor"]))
 
 # %% [markdown]
+# ### One gain for every density: the features per neighbour
+#
+# Where the velocities of a drone's neighbours are its best guess of the swarm's, the expert's action
+# is $\mathbf u_i \approx N(\bar{\mathbf v}_i - \mathbf v_i)$, with $\bar{\mathbf v}_i$ the mean velocity of
+# its $n_i = |\mathcal N_i|$ neighbours. The feature of section 1 is a *sum*,
+# $\sum_{j \in \mathcal N_i}(\mathbf v_i - \mathbf v_j) = n_i(\mathbf v_i - \bar{\mathbf v}_i)$, so the action
+# it should map to is $-(N / n_i)$ times it: a gain that depends on the degree $n_i$, which none of the
+# six features carries. Trained at $N = 50$ and $R = 1.5$ m the DAGNN learns the gain of that degree;
+# in a denser team (larger $N'$) it brakes too hard, with a smaller radius (fewer neighbours) too
+# softly. Divided by $n_i$ (`local_features(..., per_neighbour=True)`,
+# `DAGNNTrainConfig(feature_transform="per_neighbour")`), each feature is a mean and the action is
+# $-N$ times it at every density and radius. Each drone counts its own neighbours, so it stays local.
+# Both trained at $N = 50$, $R = 1.5$ m, flown across the columns of Tables 2b and 3 on validation
+# episodes (`python tools/experiments/teams_and_radii.py --name dagnn_per_neighbour --feature-transform
+# per_neighbour`, three training seeds):
+
+# %%
+from vgai_lite.evaluate import flocked, variance_text
+
+PER_NEIGHBOUR = {"sums (eq. 4, the paper's)": ["dagnn_K4"],
+                 "per neighbour": ["dagnn_per_neighbour", "dagnn_per_neighbour_seed1", "dagnn_per_neighbour_seed2"]}
+pn_cells = {label: [json.loads((DATA_DIR / "experiments" / f"{n}_teams.json").read_text())["cells"] for n in names]
+            for label, names in PER_NEIGHBOUR.items()}
+pn_cols = list(pn_cells["per neighbour"][0])
+display(Markdown("| DAGNN features | training seed | " + " | ".join(c.replace("N=", "N' = ").replace("R=", "R = ")
+                                                               for c in pn_cols)
+                 + " |\n|---|---|" + "---|" * len(pn_cols) + "\n" + "\n".join(
+                     f"| {label} | {seed} | " + " | ".join(
+                         f"{x[c]['relative_cost_mean']:.2f} · {variance_text(x[c]['velocity_variance_median']['5s'])} · "
+                         f"{x[c]['share_connected_at_end']:.0%}" + (" · flocked" if flocked(x[c]) else "") for c in pn_cols) + " |"
+                     for label, runs in pn_cells.items() for seed, x in enumerate(runs))
+                 + "\n\nEach cell: relative cost · median velocity variance at 5 s [m²/s²] · connected at 5 s; "
+                   f"{pn_cells['per neighbour'][0]['N=50']['episodes']} validation episodes per cell."))
+pn = pn_cells["per neighbour"]
+prose("Per neighbour, {f100} of {n} training seeds flock at N' = 100 and {f200} of {n} at N' = 200 (the sums: "
+      "{s200} at N' = 200); at R = 1 m their swarms stay connected at 5 s in {c1} of episodes (the sums: {sc1:.0%}), "
+      "and {r1} of {n} keep the variance at 5 s at or below 1e-2 m²/s².",
+      n=len(pn), f100=sum(flocked(x["N=100"]) for x in pn), f200=sum(flocked(x["N=200"]) for x in pn),
+      s200="flocked" if flocked(pn_cells["sums (eq. 4, the paper's)"][0]["N=200"]) else "not flocked",
+      c1=", ".join(f"{x['R=1.0']['share_connected_at_end']:.0%}" for x in pn),
+      sc1=pn_cells["sums (eq. 4, the paper's)"][0]["R=1.0"]["share_connected_at_end"],
+      r1=sum(x["R=1.0"]["velocity_variance_median"]["5s"] <= 1e-2 for x in pn))
+
+# %% [markdown]
 # ## 10. What the cost measures, and what it does not
 #
 # Eq. 1 scores velocity agreement only. Most of it accrues in the first steps (notebook 01, section 7, measured how much), while the expert

@@ -575,7 +575,9 @@ from vgai_lite.evaluate import as_safe_as_expert
 TEAM_RUNS = {"shipped (N = 50, R = 1.5 m)": "dagnn_K4", "teams 50, 100, 200": "dagnn_teams",
              "R in [1, 2] m": "dagnn_radii", "both": "dagnn_teams_radii",
              "teams 50, 100 (the expert stable)": "dagnn_teams_stable",
-             "teams 50, 100 and R in [1, 2] m": "dagnn_teams_radii_stable"}
+             "teams 50, 100 and R in [1, 2] m": "dagnn_teams_radii_stable",
+             "K − 1 = 5 exchanges, R in [1, 2] m": "dagnn_K6_radii",
+             "features per neighbour (N = 50, R = 1.5 m; notebook 03)": "dagnn_per_neighbour"}
 team_recs = {label: json.loads((DATA_DIR / "experiments" / f"{name}_teams.json").read_text())["cells"]
              for label, name in TEAM_RUNS.items()}
 team_cols = list(next(iter(team_recs.values())))
@@ -632,6 +634,15 @@ prose("The expert itself does not flock at N' = 200: sampled at Ts it multiplies
       best="Flocked at N' = 200: {}. Flocked at both N = 50 and N' = 100: {}.".format(
           ", ".join(l for l, c in team_recs.items() if flocked(c["N=200"])) or "none",
           ", ".join(l for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none"))
+k6, pnt = team_recs["K − 1 = 5 exchanges, R in [1, 2] m"], team_recs["features per neighbour (N = 50, R = 1.5 m; notebook 03)"]
+prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 5 and R drawn in training it is connected "
+      "at 5 s in {k6c:.0%} of episodes. What changes the picture is the features' scale: divided by each drone's "
+      "number of neighbours (notebook 03, section 9), the DAGNN trained at N = 50 and R = 1.5 m alone is connected at "
+      "R = 1 m in {pc:.0%} (variance {pv} m²/s²) and at N' = 200 reaches {p200} m²/s² ({pf}).",
+      k6c=k6["R=1.0"]["share_connected_at_end"], pc=pnt["R=1.0"]["share_connected_at_end"],
+      pv=variance_text(pnt["R=1.0"]["velocity_variance_median"]["5s"]),
+      p200=variance_text(pnt["N=200"]["velocity_variance_median"]["5s"]),
+      pf="flocked" if flocked(pnt["N=200"]) else "not flocked")
 
 # %% [markdown]
 # What favours ours. The list above explains why ours might differ; these are the advantages the
