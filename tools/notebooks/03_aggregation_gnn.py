@@ -466,6 +466,23 @@ prose("Per neighbour, {f100} of {n} training seeds flock at N' = 100 and {f200} 
       r1=sum(x["R=1.0"]["velocity_variance_median"]["5s"] <= 1e-2 for x in pn))
 
 # %% [markdown]
+# Chosen on those validation episodes, training seed 0 is flown once on the test episodes (reporting
+# only; `teams_and_radii.py --evaluate data/experiments/dagnn_per_neighbour.pt --test --episodes 50`):
+
+# %%
+from vgai_lite.evaluate import as_safe_as_expert
+
+pt = json.loads((DATA_DIR / "experiments" / "dagnn_per_neighbour_teams_test.json").read_text())["cells"]
+display(Markdown("| DAGNN per neighbour, seed 0 | " + " | ".join(c.replace("N=", "N' = ").replace("R=", "R = ") for c in pt)
+                 + " |\n|---|" + "---|" * len(pt) + "\n| test episodes | " + " | ".join(
+                     f"{x['relative_cost_mean']:.2f} ({x['relative_cost_mean_ci95'][0]:.2f}-{x['relative_cost_mean_ci95'][1]:.2f})"
+                     f" · {variance_text(x['velocity_variance_median']['5s'])} · {x['share_connected_at_end']:.0%}"
+                     + (" · flocked" if flocked(x) else "") + ("" if as_safe_as_expert(x) else " · **less safe than the expert**")
+                     for x in pt.values()) + " |\n\n"
+                 + f"Each cell: relative cost (95% CI) · variance at 5 s [m²/s²] · connected at 5 s; "
+                   f"{next(iter(pt.values()))['episodes']} test episodes per cell."))
+
+# %% [markdown]
 # ## 10. What the cost measures, and what it does not
 #
 # Eq. 1 scores velocity agreement only. Most of it accrues in the first steps (notebook 01, section 7, measured how much), while the expert
