@@ -621,6 +621,30 @@ display(prose("At 5 s the depth camera brakes with γ = {dg:.1f} /s against a fo
                    gg["damping_gain_median"] < gd["damping_gain_median"] / 1.5)]))
 
 # %% [markdown]
+# **Or is it trained too briefly?** The gray-only VGAI's round checks still fell at its fourth and last
+# DAgger round. The same training (seed 0, the narrower ranges, gray only) with eight rounds instead of
+# four (`python tools/experiments/vgai_variant.py --name vgai_camera_gray_rounds8 --camera
+# 0,0.05:0,1.4:0.9,1.1:-0.03,0.03:0.05 --channels gray --dagger-rounds 8`; its first four rounds are
+# the very same):
+
+# %%
+long_ = json.loads((exp_dir / "vgai_camera_gray_rounds8.json").read_text())
+short_ = cam_train[chosen["gray only"]]
+display(prose("Its round checks read {checks} after rounds 1 to {n}. On the validation episodes it costs {c:.2f} "
+              "({lo:.2f}-{hi:.2f}), variance at 5 s {v} m²/s², connected at 5 s in {conn:.0%}, against {c4:.2f} and "
+              "{v4} m²/s² after four rounds: {cost}, and it {flock}. Training it {mins:.0f} min (one thread, beside "
+              "another training).",
+              checks=", ".join(f"{x['check_relative_cost']:.2f}" for x in long_["round_checks"][1:]),
+              n=len(long_["round_checks"]) - 1, c=long_["relative_cost_mean"], lo=long_["relative_cost_mean_ci95"][0],
+              hi=long_["relative_cost_mean_ci95"][1], v=variance_text(long_["velocity_variance_median"]["5s"]),
+              conn=long_["share_connected_at_end"], c4=short_["relative_cost_mean"],
+              v4=variance_text(short_["velocity_variance_median"]["5s"]),
+              cost={-1: "cheaper, beyond the intervals", 0: "the intervals overlap",
+                    1: "dearer, beyond the intervals"}[compare(long_, short_)],
+              flock="flocks" if flocked(long_) else "still does not flock",
+              mins=long_["train_seconds"] / 60))
+
+# %% [markdown]
 # ## 7. Larger teams in a perturbed world
 #
 # Trained on 50 drones, flown by 100 and 200 with the perturbations that hurt most at 50 (fewer
