@@ -464,6 +464,15 @@ prose("Per neighbour, {f100} of {n} training seeds flock at N' = 100 and {f200} 
       c1=", ".join(f"{x['R=1.0']['share_connected_at_end']:.0%}" for x in pn),
       sc1=pn_cells["sums (eq. 4, the paper's)"][0]["R=1.0"]["share_connected_at_end"],
       r1=sum(x["R=1.0"]["velocity_variance_median"]["5s"] <= 1e-2 for x in pn))
+oracle = json.loads((DATA_DIR / "experiments" / "khop_oracle.json").read_text())["radii"]["1.0"]
+prose("What a drone can know is not what holds the sums back at R = 1 m: an oracle that applies the expert's gain "
+      "to the exact mean velocity of the drones within k hops (`tools/experiments/khop_oracle.py`, the same "
+      "validation episodes) keeps the swarm connected at 5 s in {o1:.0%} of episodes with one hop and {o3:.0%} with "
+      "three (variance at 5 s {v1} and {v3} m²/s²); the expert, who knows every velocity, in {oe:.0%}.",
+      o1=oracle["1-hop"]["share_connected_at_end"], o3=oracle["3-hop"]["share_connected_at_end"],
+      v1=variance_text(oracle["1-hop"]["velocity_variance_median"]["5s"]),
+      v3=variance_text(oracle["3-hop"]["velocity_variance_median"]["5s"]),
+      oe=oracle["expert"]["share_connected_at_end"])
 
 # %% [markdown]
 # Chosen on those validation episodes, training seed 0 is flown once on the test episodes (reporting
