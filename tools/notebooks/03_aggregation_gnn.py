@@ -456,14 +456,14 @@ display(Markdown("| DAGNN features | training seed | " + " | ".join(c.replace("N
                  + "\n\nEach cell: relative cost · median velocity variance at 5 s [m²/s²] · connected at 5 s; "
                    f"{pn_cells['per neighbour'][0]['N=50']['episodes']} validation episodes per cell."))
 pn = pn_cells["per neighbour"]
-prose("Per neighbour, {f100} of {n} training seeds flock at N' = 100 and {f200} of {n} at N' = 200 (the sums: "
+display(prose("Per neighbour, {f100} of {n} training seeds flock at N' = 100 and {f200} of {n} at N' = 200 (the sums: "
       "{s200} at N' = 200); at R = 1 m their swarms stay connected at 5 s in {c1} of episodes (the sums: {sc1:.0%}), "
       "and {r1} of {n} keep the variance at 5 s at or below 1e-2 m²/s².",
       n=len(pn), f100=sum(flocked(x["N=100"]) for x in pn), f200=sum(flocked(x["N=200"]) for x in pn),
       s200="flocked" if flocked(pn_cells["sums (eq. 4, the paper's)"][0]["N=200"]) else "not flocked",
       c1=", ".join(f"{x['R=1.0']['share_connected_at_end']:.0%}" for x in pn),
       sc1=pn_cells["sums (eq. 4, the paper's)"][0]["R=1.0"]["share_connected_at_end"],
-      r1=sum(x["R=1.0"]["velocity_variance_median"]["5s"] <= 1e-2 for x in pn))
+      r1=sum(x["R=1.0"]["velocity_variance_median"]["5s"] <= 1e-2 for x in pn)))
 oracle = json.loads((DATA_DIR / "experiments" / "khop_oracle.json").read_text())["radii"]["1.0"]
 prose("What a drone can know is not what holds the sums back at R = 1 m: an oracle that applies the expert's gain "
       "to the exact mean velocity of the drones within k hops (`tools/experiments/khop_oracle.py`, the same "

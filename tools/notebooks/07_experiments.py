@@ -619,7 +619,7 @@ prose("Drawing both in training makes the DAGNN flock where the shipped one does
 # %%
 stab = json.loads((DATA_DIR / "experiments" / "expert_stability.json").read_text())["teams"]
 st, srt = team_recs["teams 50, 100 (the expert stable)"], team_recs["teams 50, 100 and R in [1, 2] m"]
-prose("The expert itself does not flock at N' = 200: sampled at Ts it multiplies a velocity deviation by 1 − N Ts "
+display(prose("The expert itself does not flock at N' = 200: sampled at Ts it multiplies a velocity deviation by 1 − N Ts "
       "per step, which is {p200:+.0f} there (notebook 03, section 9; its variance at 5 s is {e200:.1e} m²/s²). Trained "
       "only on teams of 50 and 100, where that factor is {p50:+.1f} and {p100:+.1f}, the DAGNN does not flock even at "
       "N = 50 (variance at 5 s {s50:.1e} m²/s², connected at 5 s in {sc50:.0%} of episodes); its step factor there is "
@@ -633,7 +633,7 @@ prose("The expert itself does not flock at N' = 200: sampled at Ts it multiplies
       rc200=srt["N=200"]["share_connected_at_end"],
       best="Flocked at N' = 200: {}. Flocked at both N = 50 and N' = 100: {}.".format(
           ", ".join(l for l, c in team_recs.items() if flocked(c["N=200"])) or "none",
-          ", ".join(l for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none"))
+          ", ".join(l for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none")))
 k6, pnt = team_recs["K − 1 = 5 exchanges, R in [1, 2] m"], team_recs["features per neighbour (N = 50, R = 1.5 m; notebook 03)"]
 prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 5 and R drawn in training it is connected "
       "at 5 s in {k6c:.0%} of episodes. What changes the picture is the features' scale: divided by each drone's "
@@ -643,6 +643,53 @@ prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 
       pv=variance_text(pnt["R=1.0"]["velocity_variance_median"]["5s"]),
       p200=variance_text(pnt["N=200"]["velocity_variance_median"]["5s"]),
       pf="flocked" if flocked(pnt["N=200"]) else "not flocked")
+
+# %% [markdown]
+# **And VGAI?** Its CNN learns to read the same six features (stage 1, and stage 3's
+# state-estimation loss), as sums; `VGAITrainConfig(feature_means=True)` makes them the means per
+# neighbour, as the DAGNN's above. The book's recipe (training seed 0) trained so, beside the same
+# recipe as it is, and that one flown again with its renderer drawing only each drone's 49 nearest
+# drones (`RenderConfig(nearest=49)`: in a larger team, a panorama as crowded as the ones it trained
+# on); all trained at $N = 50$, $R = 1.5$ m and flown on the same validation episodes
+# (`python tools/experiments/vgai_variant.py --name vgai_depthcam_means --feature-means`, then
+# `python tools/experiments/teams_and_radii.py --evaluate ...`):
+
+# %%
+VGAI_TEAM_RUNS = {"the book's recipe": "vgai_depthcam",
+                  "the same, drawing each drone's 49 nearest": "vgai_depthcam_nearest49",
+                  "features per neighbour": "vgai_depthcam_means"}
+vgai_team_recs = {label: json.loads((DATA_DIR / "experiments" / f"{name}_teams.json").read_text())["cells"]
+                  for label, name in VGAI_TEAM_RUNS.items()}
+display(Markdown("| VGAI | " + " | ".join(c.replace("N=", "N' = ").replace("R=", "R = ") for c in team_cols)
+                 + " |\n|---|" + "---|" * len(team_cols) + "\n" + "\n".join(
+                     f"| {label} | " + " | ".join(team_cell(cells[c]) if c in cells else "–" for c in team_cols) + " |"
+                     for label, cells in vgai_team_recs.items())
+                 + "\n\nEach cell as in the DAGNN's table; –: not flown (at N = 50 a drone's 49 nearest are every "
+                   "other drone)."))
+vb, vn, vm = vgai_team_recs.values()
+
+
+def than(c, a, b):  # by the book's one rule: intervals apart, or level
+    return {-1: "below", 0: "level with (intervals overlap)", 1: "above"}[findings.compare(a[c], b[c])]
+
+
+prose("With the features per neighbour the book's VGAI flocks in {mf}; as it is, in {bf}. Its cost is {c50} the "
+      "recipe's at N = 50 ({m50:.2f} against {b50:.2f}), {c200} it at N' = 200 ({m200:.2f} against {b200:.2f}; variance "
+      "at 5 s {mv200} against {bv200} m²/s²) and {c1} it at R = 1 m ({m1:.2f} against {b1:.2f}; {mv1} against {bv1}). "
+      "Drawing only each drone's 49 nearest, the recipe as it is reaches {nv200} m²/s² at N' = 200: {crowd}",
+      mf=", ".join(c.replace("=", " = ") for c in team_cols if flocked(vm[c])) or "no column",
+      bf=", ".join(c.replace("=", " = ") for c in team_cols if flocked(vb[c])) or "no column",
+      c50=than("N=50", vm, vb), m50=vm["N=50"]["relative_cost_mean"], b50=vb["N=50"]["relative_cost_mean"],
+      c200=than("N=200", vm, vb), m200=vm["N=200"]["relative_cost_mean"], b200=vb["N=200"]["relative_cost_mean"],
+      mv200=variance_text(vm["N=200"]["velocity_variance_median"]["5s"]),
+      bv200=variance_text(vb["N=200"]["velocity_variance_median"]["5s"]),
+      c1=than("R=1.0", vm, vb), m1=vm["R=1.0"]["relative_cost_mean"], b1=vb["R=1.0"]["relative_cost_mean"],
+      mv1=variance_text(vm["R=1.0"]["velocity_variance_median"]["5s"]),
+      bv1=variance_text(vb["R=1.0"]["velocity_variance_median"]["5s"]),
+      nv200=variance_text(vn["N=200"]["velocity_variance_median"]["5s"]),
+      crowd={True: "the crowded panorama is part of what keeps it from flocking there.",
+             False: "a panorama as crowded as at N = 50 does not make it flock there; the crowd is not what limits it."}[
+          flocked(vn["N=200"])])
 
 # %% [markdown]
 # What favours ours. The list above explains why ours might differ; these are the advantages the
