@@ -44,6 +44,7 @@ def test_readme_results_section_is_the_one_the_records_give():
 # Besides these: integers up to 12 (counts, section and equation numbers), years, every number of
 # the paper's tables (``vgai_lite.lab.paper``) and every value of the config objects.
 DEFINED_NUMBERS = {
+    "49": "the drones a panorama draws in a larger team (RenderConfig(nearest=49)): every other drone at N = 50",
     "360°": "the panorama's field of view",
     "90°": "one camera's horizontal field of view",
     "45°": "half a camera's field of view (the pinhole model)",

@@ -28,7 +28,8 @@ def _pilot(cfg):
     return pilot(cfg)
 
 
-RULES = {"Local": LocalController, "local": LocalController, "modular vision pilot": _pilot}
+RULES = {"Local": LocalController, "local": LocalController, "modular vision pilot": _pilot,
+         "k-hop oracle": None}  # tools/experiments/khop_oracle.py: a measurement without pinned episodes
 """Records of controllers that are built rather than loaded from one checkpoint (a rule, or the
 modular vision pilot composed of two networks), by the name a record gives them."""
 

@@ -57,7 +57,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
     command = " ".join(["python tools/experiments/khop_oracle.py"] + (argv or sys.argv[1:]))
-    out = {"command": command, "radii": {}}
+    out = {"command": command, "controller": "k-hop oracle", "radii": {}}
     with Provenance(command) as prov:
         for R in (float(x) for x in args.radii.split(",")):
             flight = flight_config(ReproduceConfig(), "R", R)

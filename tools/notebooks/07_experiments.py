@@ -687,9 +687,11 @@ prose("With the features per neighbour the book's VGAI flocks in {mf}; as it is,
       mv1=variance_text(vm["R=1.0"]["velocity_variance_median"]["5s"]),
       bv1=variance_text(vb["R=1.0"]["velocity_variance_median"]["5s"]),
       nv200=variance_text(vn["N=200"]["velocity_variance_median"]["5s"]),
-      crowd={True: "the crowded panorama is part of what keeps it from flocking there.",
-             False: "a panorama as crowded as at N = 50 does not make it flock there; the crowd is not what limits it."}[
-          flocked(vn["N=200"])])
+      crowd=("a panorama as crowded as at N = 50 makes it flock there: the crowd is what limits it." if flocked(vn["N=200"])
+             else "{:.1f} times lower, not flocked: the crowded panorama is part of what limits it, not all.".format(
+                 vb["N=200"]["velocity_variance_median"]["5s"] / vn["N=200"]["velocity_variance_median"]["5s"])
+             if vn["N=200"]["velocity_variance_median"]["5s"] * 1.5 < vb["N=200"]["velocity_variance_median"]["5s"]
+             else "not flocked, and no lower: the crowd is not what limits it."))
 
 # %% [markdown]
 # What favours ours. The list above explains why ours might differ; these are the advantages the
