@@ -75,8 +75,8 @@ class VGAITrainConfig:
         learner_swarms: the share of each DAgger round's swarms that the learner flies alone (p = 1
             at every step), the others under the paper's mixture (p_learner): the states the
             learner's own drifting leads to, late in a flight, labelled with the expert's braking.
-            The book's recipe: 0.5 (0: the paper's mixture alone). Without it the recipe does not
-            flock (notebook 11's leave-one-out, ``findings.needs``: the one sentence on what the flock needs).
+            The book's recipe: 0.5 (0: the paper's mixture alone). What the flock needs of it: notebook
+            11's leave-one-out (``findings.needs``, the book's one sentence on what the flock needs).
         camera: what the training's cameras do to the rendered frames, drawn per flight and per
             training window (``camera.CameraRanges``: sensor noise, lens blur, exposure, a dead
             camera; domain randomisation). Every stage sees the frames through it: stage 1's states,

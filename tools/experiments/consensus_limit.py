@@ -1,6 +1,8 @@
 """Experiment: what keeps VGAI's velocities apart late in a flight? Damping against forcing.
 
     python tools/experiments/consensus_limit.py --out data/experiments/consensus_limit.json
+    python tools/experiments/consensus_limit.py --N 200 --checkpoints data/dagnn/dagnn_K4.pt,data/vgai/vgai_F24.pt \
+        --out data/experiments/consensus_limit_N200.json   (given checkpoints, flown in teams of N, radius R)
 
 The velocity variance V = (1/N) sum_i ||v_i - vbar||^2 changes by dV/dt = (2/N) sum_i (v_i - vbar).(u_i - ubar):
 it falls only where the actions oppose the drones' velocity disagreements. So we ask two questions
@@ -26,6 +28,7 @@ braking, so the velocity spread settles where the two balance, near (f / gamma)^
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -38,6 +41,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from vgai_lite import FlockConfig, load_controller, rollout, sample_initial_state  # noqa: E402
 from vgai_lite.book import DATA_DIR, WORKING_SEED  # noqa: E402
+from vgai_lite.lab.reproduce import ReproduceConfig, flight_config  # noqa: E402
 from vgai_lite.lab.provenance import Provenance, repo_relative, sha256  # noqa: E402
 
 VGAIS = {"VGAI on clean frames without the learner flying alone (DAgger's mixture only), training seed 0": "experiments/vgai_F24_mixture.pt",
@@ -91,14 +95,54 @@ def damping_and_forcing(controller, cfg: FlockConfig, episodes: int = 10, seed: 
     return out
 
 
+def report(label: str, res: dict) -> None:
+    print(label, flush=True)
+    for t, x in res.items():
+        print(f"  {t}: variance {x['velocity_variance_median']:.2e}, damping gain {x['damping_gain_median']:.2f} /s, "
+              f"forcing at rest {x['forcing_at_rest_rms_median']:.3f} m/s², (f/gamma)² {x['balance_variance_median']:.2e}",
+              flush=True)
+
+
+def fly_given(args, cfg: FlockConfig, paths: list, argv) -> int:
+    """Damping and forcing of the given checkpoints in teams of cfg.N at radius cfg.R (what limits a controller
+    flown beyond its training's team or radius); the expert's own gain there is N, by eq. 2."""
+    for path in paths:
+        if not path.is_file():
+            raise SystemExit(f"--checkpoints: no checkpoint at {path}")
+    command = " ".join(["python tools/experiments/consensus_limit.py"] + (argv or sys.argv[1:]))
+    out = {"command": command, "episodes": args.episodes, "seed": args.seed, "N": cfg.N, "R": cfg.R,
+           "expert_damping_gain": cfg.N, "controllers": {}}
+    with Provenance(command) as prov:
+        for path in paths:
+            res = damping_and_forcing(load_controller(path), cfg, args.episodes, seed=args.seed)
+            out["controllers"][path.stem] = res
+            report(path.stem, res)
+    out["provenance"] = prov.record(seed=args.seed, episodes=args.episodes,
+                                    checkpoints={repo_relative(p): sha256(p) for p in paths})
+    if args.out:
+        Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--out", default=None)
+    p.add_argument("--N", type=int, default=None, help="team size flown (default: the book's N)")
+    p.add_argument("--R", type=float, default=None, help="communication radius flown, m (default: the book's R)")
+    p.add_argument("--seed", type=int, default=WORKING_SEED, help="seed of the episodes' initial conditions")
+    p.add_argument("--checkpoints", default=None, metavar="PATH,PATH",
+                   help="fly only these controllers (labelled by file name) instead of the book's set")
     args = p.parse_args(argv)
     torch.set_num_threads(args.threads)
     cfg = FlockConfig()
+    if args.N is not None or args.R is not None:  # a table's column, flown as reproduce flies it
+        rc = ReproduceConfig()
+        cfg = flight_config(rc, "N", args.N) if args.N is not None else flight_config(rc, "R", args.R)
+        cfg = dataclasses.replace(cfg, R=args.R) if args.R is not None else cfg
+    if args.checkpoints:
+        return fly_given(args, cfg, [Path(x) for x in args.checkpoints.split(",")], argv)
     from estimator_in_the_loop import VisionDAGNN, odd_estimator  # the modular vision pilot
 
     dagnn = load_controller(DATA_DIR / "dagnn" / "dagnn_K4.pt")
@@ -117,11 +161,7 @@ def main(argv=None) -> int:
         for label, c in pilots.items():
             res = damping_and_forcing(c, cfg, args.episodes)
             out["controllers"][label] = res
-            print(label, flush=True)
-            for t, x in res.items():
-                print(f"  {t}: variance {x['velocity_variance_median']:.2e}, damping gain {x['damping_gain_median']:.2f} /s, "
-                      f"forcing at rest {x['forcing_at_rest_rms_median']:.3f} m/s², (f/gamma)² {x['balance_variance_median']:.2e}",
-                      flush=True)
+            report(label, res)
     out["provenance"] = prov.record(seed=WORKING_SEED, episodes=args.episodes,
                                     checkpoints={repo_relative(p): sha256(p) for p in read})
     if args.out:

@@ -1,6 +1,6 @@
 """One criterion for every finding the book states about its numbers, and the sentence it gives.
 
-Introduced in notebook 06; notebook 07 checks the paper's findings with it. A relative cost comes
+Introduced in notebook 03 (its first use); notebook 07 checks the paper's findings with it. A relative cost comes
 with an interval: its bootstrap 95 % interval over episodes, or, for a row averaged over several
 training seeds, mean ± 1.96 × (spread over seeds) / √seeds. Then:
 

@@ -71,6 +71,30 @@ its warm starts (``BOOK_SENSOR``; "the paper's recipe" of notebook 11's first ab
 paper's VGAI itself was flown): their records (and vgai_F24_plain's checkpoint) are kept in
 data/experiments/, for notebook 11's table and notebook 07's two trainings of one configuration."""
 
+CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthcam_seed2")
+"""The book's recipe from training seeds 0, 1 and 2 as trained (data/experiments/NAME.json, copied to
+data/vgai/seeds/vgai_F24_seedS when the camera became the book's): their camera evaluations on the
+validation episodes, NAME_cameras.json (notebook 08)."""
+
+CLEAN_SEED_RUNS: tuple = ("vgai_clean_seed0", "vgai_clean_seed1", "vgai_clean_seed2")
+"""The book's recipe on clean frames (``BOOK_RECIPE`` without ``BOOK_CAMERA``; the book's VGAI until the
+camera), training seeds 0, 1 and 2: data/experiments/NAME.pt and .json (validation episodes). What the
+camera costs on clean frames, and the leave-one-out's row without the camera."""
+
+DEPARTURES: dict[str, frozenset] = {
+    "the learner flying alone": frozenset({"learner_swarms"}),
+    "the depth channel": frozenset({"vision", "camera"}),  # the camera: no range error without depth
+    "the warm starts": frozenset({"warm_starts"}),
+    "the second frame": frozenset({"vision", "motion_features"}),
+    "the odd motion features": frozenset({"motion_features"}),
+    "the synthetic relative velocities": frozenset({"synthetic_share"}),
+    "the state-estimation loss in stage 3": frozenset({"aux_weight"}),
+    "the camera model": frozenset({"camera"}),
+}
+"""The book's departures from the paper that a leave-one-out takes back, each with the fields of
+``VGAITrainConfig`` it may set (a test checks that every leave-one-out training differs from its recipe in
+these alone; the depth channel's camera differs only where the recipe's gives depth a range error)."""
+
 LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {
     "the learner flying alone": ("vgai_F24_validation", "DAgger's mixture only"),
     "the depth channel": ("vgai_learner_gray", "gray and its motion channel"),
@@ -97,17 +121,6 @@ CAMERA_RUNS: dict[str, dict[str, str]] = {
 the camera's ranges and the sensor: data/experiments/NAME.pt, .json and NAME_cameras.json (notebook 08).
 The narrower ranges with gray + depth won (``chosen_camera_runs``) and became the book's recipe
 (``vgai_config.BOOK_CAMERA``): vgai_depthcam is the book's vgai_F24_seed0."""
-
-
-CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthcam_seed2")
-"""The book's recipe from training seeds 0, 1 and 2 as trained (data/experiments/NAME.json, copied to
-data/vgai/seeds/vgai_F24_seedS when the camera became the book's): their camera evaluations on the
-validation episodes, NAME_cameras.json (notebook 08)."""
-
-CLEAN_SEED_RUNS: tuple = ("vgai_clean_seed0", "vgai_clean_seed1", "vgai_clean_seed2")
-"""The book's recipe on clean frames (``BOOK_RECIPE`` without ``BOOK_CAMERA``; the book's VGAI until the
-camera), training seeds 0, 1 and 2: data/experiments/NAME.pt and .json (validation episodes). What the
-camera costs on clean frames, and the leave-one-out's row without the camera."""
 
 
 SEED_RULE = "among the seeds that flocked on the validation episodes, the lowest relative cost (all seeds if none flocked)"
