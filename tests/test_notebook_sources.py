@@ -271,3 +271,15 @@ def test_every_controller_of_the_book_has_its_own_colour():
     assert len(set(named.values())) == len(named), "two controllers share a colour"
     assert controller_color("VGAI, depth camera") == PALETTE["depth camera"] != PALETTE["VGAI"]
     assert controller_color("the paper's VGAI (one gray frame)") == PALETTE["paper's VGAI"]
+
+
+MARKDOWN_WORD_LIMITS = {"07_experiments": 2000}
+"""Chapters with a word budget for their markdown (the reader's time): the results chapter reads in one sitting."""
+
+
+@pytest.mark.parametrize("stem", sorted(MARKDOWN_WORD_LIMITS))
+def test_a_chapter_with_a_word_budget_keeps_to_it(stem):
+    import re
+
+    words = len(re.findall(r"\S+", _markdown(ROOT / "tools" / "notebooks" / f"{stem}.py")))
+    assert words <= MARKDOWN_WORD_LIMITS[stem], f"{stem}: {words} words of markdown, budget {MARKDOWN_WORD_LIMITS[stem]}"

@@ -288,7 +288,7 @@ display(Markdown("| training data | relative cost (95% CI) | episodes < 0.05 m |
 # %%
 from vgai_lite.lab import findings
 
-prose("By the book's one criterion (notebook 07, `vgai_lite/lab/findings.py`: a cost is lower than another when their 95% "
+prose("By the book's one criterion (`vgai_lite/lab/findings.py`: a cost is lower than another when their 95% "
       "intervals do not overlap), {verdict} The DAGNN's mistakes are small, so the states it visits are not far from the "
       "expert's; notebook 11 (section 6) shows a learner whose mistakes are not small, where DAgger's data decides everything.",
       verdict={-1: "DAgger lowers the cost here.", 0: "this budget cannot tell the two apart: the intervals overlap.",

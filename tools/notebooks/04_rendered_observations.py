@@ -226,10 +226,8 @@ display(Markdown("| controller | episodes with a contact | contacts in all | lar
                  "|---|---|---|---|\n" + "\n".join(rows)))
 
 # %% [markdown]
-# **Close calls, measured two ways.** Notebook 01 counts the
-# episodes in which some pair comes closer than 0.1 m (two body radii: the bodies touch), on 50
-# working episodes. This table flies only the first of those episodes. On exactly these, our own simulator's
-# closest approaches give:
+# **Close calls, measured two ways.** The same episodes as the table above, by our simulator's
+# closest approaches (a pair closer than two body radii: the bodies touch) against pymunk's contacts:
 
 # %%
 E, d = len(r0), 2 * rcfg.body_radius

@@ -133,7 +133,7 @@ print(f"trained in {training_minutes(record):.0f} min, stages 1 to 3 (stage 1: "
 # %%
 fig, axes = plt.subplots(1, 3, figsize=(15, 3.6))
 w = np.convolve(hist["warm_loss"], np.ones(50) / 50, mode="valid")
-axes[0].plot(w), axes[0].set_title("stage 1: CNN -> local features")
+axes[0].plot(w, color=PALETTE["VGAI"]), axes[0].set_title("stage 1: CNN -> local features")
 axes[0].set_xlabel("step"), axes[0].set_ylabel("L1 loss (standardised features)")
 axes[1].plot(np.convolve(hist["joint_loss"], np.ones(50) / 50, mode="valid"), color=PALETTE["VGAI"])
 steps_per_round = len(hist["joint_loss"]) // max(1, len(hist["rounds"]) - 1)
@@ -143,7 +143,7 @@ axes[1].set_title("stage 3: joint K-step BPTT (dotted: a new DAgger round)", fon
 axes[1].set_xlabel("step (moving average of 50)")
 axes[1].set_ylabel("L1 on actions [m/s²]\n+ aux_weight × stage-1 loss")
 stages = [r["stage"] for r in hist["rounds"]]
-axes[2].plot(range(len(stages)), [r["check_relative_cost"] for r in hist["rounds"]], "o-")
+axes[2].plot(range(len(stages)), [r["check_relative_cost"] for r in hist["rounds"]], "o-", color=PALETTE["VGAI"])
 axes[2].set_xticks(range(len(stages)), [s.replace("DAgger round", "round") for s in stages], rotation=20)
 axes[2].set_title("round-check relative cost"), axes[2].axhline(1, color="0.5", ls="--")
 plt.tight_layout()

@@ -36,7 +36,6 @@ from vgai_lite.controllers import expert_control
 from vgai_lite.flocking import NonFiniteStateError
 from vgai_lite.lab.perturbations import Blur, DeadCamera, DroppedLinks, ImageNoise, MessageDelay, World, perturbed
 from vgai_lite.lab import robustness
-from vgai_lite.lab.runs import training_minutes
 from vgai_lite.viz import PALETTE, controller_color
 
 cfg = FlockConfig()
@@ -173,7 +172,7 @@ if RERUN:
 results = robustness.load()
 rc = robustness.RobustnessConfig()
 print(f"{len(results['cells'])} cells, {results['evaluation_seconds'] / 60:.0f} min of flying "
-      f"({results['torch_threads']} threads); episodes per cell: {rc.episodes} (N = 50), {rc.episodes_large} (N' >= 100)")
+      f"({results['torch_threads']} thread{'s' if results['torch_threads'] > 1 else ''}); episodes per cell: {rc.episodes} (N = 50), {rc.episodes_large} (N' >= 100)")
 print(robustness.format_results(results))
 flown = robustness.find(results, "VGAI").get("checkpoint")
 head = json.loads((DATA_DIR / "test" / "vgai_F24.json").read_text())  # the book's headline evaluation
@@ -222,7 +221,7 @@ plot_curve(axes[0, 2], "position_noise", ("DAGNN",), "position noise sigma [m]")
 plot_curve(axes[1, 0], "links", ("DAGNN", "VGAI"), "share of messages lost, p", what="variance")
 plot_curve(axes[1, 1], "image_noise", ("VGAI",), "pixel noise sigma", what="variance")
 plot_curve(axes[1, 2], "position_noise", ("DAGNN",), "position noise sigma [m]", what="variance")
-axes[0, 1].set_yscale("log")  # VGAI's cost grows many-fold with pixel noise
+axes[0, 1].set_yscale("log")  # costs span orders of magnitude across the controllers and noise levels
 axes[0, 0].legend()
 axes[0, 0].set_title("lost messages")
 axes[0, 1].set_title("noisy cameras (VGAI)")
@@ -307,7 +306,6 @@ plt.tight_layout()
 plt.show()
 from vgai_lite.evaluate import FLOCKED_VARIANCE, flocked, variance_text
 from vgai_lite.lab import findings
-from vgai_lite.lab.runs import how_trained
 
 shipped = clean["VGAI"]
 target = T["image_noise_ratio"] * shipped["relative_cost_mean"]
@@ -401,8 +399,7 @@ for width, runs_ in CAMERA_TRAININGS.items():
     lines.append(f"* {width}: sensor noise σ in [{rg.noise[0]:g}, {rg.noise[1]:g}], lens blur in [{rg.blur_deg[0]:g}°, "
                  f"{rg.blur_deg[1]:g}°], gain in [{rg.gain[0]:g}, {rg.gain[1]:g}], offset in [{rg.offset[0]:g}, "
                  f"{rg.offset[1]:g}], a dead camera on {rg.dead_share:.0%} of the drones, the depth channel's range "
-                 f"error up to {rg.depth_noise[1]:.0%} of the distance; trainings of "
-                 + " and ".join(f"{training_minutes(cam_train[n]):.0f} min ({how_trained(cam_train[n])})" for n in names))
+                 f"error up to {rg.depth_noise[1]:.0%} of the distance")
 chosen = chosen_camera_runs()  # per sensor, runs.SEED_RULE on clean frames of these validation episodes
 label_of = {name: label for label, name in CAMERA_RUNS.items()}
 depth_label, gray_label = label_of[chosen["gray + depth"]], label_of[chosen["gray only"]]
@@ -632,8 +629,7 @@ long_ = json.loads((exp_dir / "vgai_camera_gray_rounds8.json").read_text())
 short_ = cam_train[chosen["gray only"]]
 display(prose("Its round checks read {checks} after rounds 1 to {n}. On the validation episodes it costs {c:.2f} "
               "({lo:.2f}-{hi:.2f}), variance at 5 s {v} m²/s², connected at 5 s in {conn:.0%}, against {c4:.2f} and "
-              "{v4} m²/s² after four rounds: {cost}, and it {flock}. Training it {mins:.0f} min (one thread, beside "
-              "another training).",
+              "{v4} m²/s² after four rounds: {cost}, and it {flock}.",
               checks=", ".join(f"{x['check_relative_cost']:.2f}" for x in long_["round_checks"][1:]),
               n=len(long_["round_checks"]) - 1, c=long_["relative_cost_mean"], lo=long_["relative_cost_mean_ci95"][0],
               hi=long_["relative_cost_mean_ci95"][1], v=variance_text(long_["velocity_variance_median"]["5s"]),
@@ -641,8 +637,7 @@ display(prose("Its round checks read {checks} after rounds 1 to {n}. On the vali
               v4=variance_text(short_["velocity_variance_median"]["5s"]),
               cost={-1: "cheaper, beyond the intervals", 0: "the intervals overlap",
                     1: "dearer, beyond the intervals"}[compare(long_, short_)],
-              flock="flocks" if flocked(long_) else "still does not flock",
-              mins=long_["train_seconds"] / 60))
+              flock="flocks" if flocked(long_) else "still does not flock"))
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world

@@ -59,7 +59,7 @@ def _rows() -> dict:
             f"with the state-estimation loss kept (weight {tv.aux_weight:g}), half of each round's swarms flown by "
             f"the learner alone; every stage sees its frames through a camera model (noise up to σ = "
             f"{tv.camera.noise[1]:g}, blur up to {tv.camera.blur_deg[1]:g}°, exposure, a dead camera; notebook 08)",
-            "the book's addition: without it the book's recipe does not flock (notebook 11's leave-one-out); "
+            "the book's additions: notebook 11's leave-one-out says which of them the flock needs; "
             "the paper's VGAI fails for its sensor (one gray frame), not for want of warm starts (notebook "
             "11's square); notebooks 05, 06 and 11"),
         "GSO": (
