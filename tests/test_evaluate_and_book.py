@@ -183,6 +183,23 @@ def test_the_lab_command_trusts_exactly_the_books_notebooks(tmp_path, monkeypatc
     assert not NotebookNotary().check_signature(nb)
 
 
+def test_a_share_of_connected_episodes_is_judged_by_its_interval():
+    from vgai_lite.lab import findings
+    lo, hi = findings.share_interval(1.0, 20)
+    assert hi == pytest.approx(1.0) and 0.8 < lo < 0.87  # Wilson: 20 of 20 still allows about 84 %
+    lo0, hi0 = findings.share_interval(0.0, 20)
+    assert lo0 == pytest.approx(0.0, abs=1e-12) and 0.13 < hi0 < 0.2
+    rec = lambda share, n=20: {"share_connected_at_end": share, "episodes": n}
+    assert findings.compare_connected(rec(0.55), rec(1.0)) == -1  # 11 of 20 against 20 of 20: a split
+    assert findings.compare_connected(rec(1.0), rec(0.55)) == 1
+    assert findings.compare_connected(rec(0.85), rec(1.0)) == 0  # 17 of 20: within the intervals
+    assert findings.compare_connected(rec(0.9, 10), rec(1.0, 10)) == 0
+    with pytest.raises(ValueError, match="share"):
+        findings.share_interval(1.2, 20)
+    with pytest.raises(ValueError, match="episode"):
+        findings.share_interval(0.5, 0)
+
+
 def test_findings_use_one_criterion():
     from vgai_lite.lab import findings
 

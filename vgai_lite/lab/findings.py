@@ -9,6 +9,7 @@ training seeds, mean ± 1.96 × (spread over seeds) / √seeds. Then:
           trend's direction; it is contradicted when some step is one in the other direction;
           otherwise our numbers cannot tell (at least one step is within its intervals).
 
+A share of episodes (connected at 5 s) is compared the same way, with its Wilson 95 % interval.
 The paper reports no intervals: its column compares its numbers as printed.
 """
 
@@ -38,6 +39,24 @@ def interval(cell: dict) -> tuple[float, float]:
 def compare(a: dict, b: dict) -> int:
     """-1 if a is lower than b by the criterion (intervals apart), +1 if higher, 0 if they overlap."""
     (alo, ahi), (blo, bhi) = interval(a), interval(b)
+    return -1 if ahi < blo else (1 if alo > bhi else 0)
+
+
+def share_interval(share: float, episodes: int) -> tuple[float, float]:
+    """(low, high): the Wilson 95 % interval of a share of episodes (e.g. those connected at 5 s), the
+    interval of a count the way ``interval`` is of a cost."""
+    if not 0.0 <= share <= 1.0 or episodes < 1:
+        raise ValueError(f"a share in [0, 1] of at least one episode, got {share!r} of {episodes!r}")
+    z = 1.96
+    centre = (share + z * z / (2 * episodes)) / (1 + z * z / episodes)
+    half = z * math.sqrt(share * (1 - share) / episodes + z * z / (4 * episodes * episodes)) / (1 + z * z / episodes)
+    return centre - half, centre + half
+
+
+def compare_connected(a: dict, b: dict) -> int:
+    """The same criterion on the share of episodes connected at the end (``share_connected_at_end`` over
+    ``episodes``): -1 if a's is lower than b's with the two intervals apart, +1 if higher, 0 if they overlap."""
+    (alo, ahi), (blo, bhi) = (share_interval(x["share_connected_at_end"], x["episodes"]) for x in (a, b))
     return -1 if ahi < blo else (1 if alo > bhi else 0)
 
 
