@@ -52,7 +52,7 @@ def _recipe(rec: dict) -> str:
 
 
 TEST_LABELS = {"local": "Local heuristic", "dagnn_K4": "DAGNN, K-1 = 3 (exact features)",
-               "vgai_F24": "VGAI, F = 24, K-1 = 3 (images only, trained through the camera: the book's recipe)",
+               "vgai_F24": "VGAI, F = 24, K-1 = 3 (its own gray and depth images, trained through the camera: the book's recipe)",
                "vgai_clean": "VGAI, the book's recipe on clean frames (no camera model; training seed 0)",
                "vgai_F24_mixture": "VGAI, the recipe on clean frames without the learner flying alone (DAgger's mixture only)"}
 
@@ -176,9 +176,10 @@ def _tables(results: dict) -> str:
     text = (("**Not yet recomputed on the test episodes, nor for the VGAIs shipped now**: " if stale else "")
             + f"The paper's tables (notebook 07, `{last['command']}`; {rc['episodes']} episodes of seed {rc['seed']} per cell, "
             f"{rc['episodes_large']} at N' >= 100; DAGNN rows over {rc['seeds']} training seeds, VGAI rows "
-            f"{rc['vgai_seeds']} training each): its last invocation computed {last['cells_computed_now']} cells and "
-            f"trained {last['models_trained_now']} models in {last['wall_seconds'] / 60:.0f} min; "
-            f"{prov['compute_seconds']['cells']} cells in all, whose evaluations took "
+            f"{rc['vgai_seeds']} training each): "
+            + (f"its last invocation computed {last['cells_computed_now']} cells and trained {last['models_trained_now']} "
+               f"models in {last['wall_seconds'] / 60:.0f} min; " if last["cells_computed_now"] else "")
+            + f"{prov['compute_seconds']['cells']} cells in all, whose evaluations took "
             f"{prov['compute_seconds']['evaluation'] / 60:.0f} min as each cell recorded when it was computed "
             f"(the invocations that computed them, with their commands and threads, are listed in "
             f"`data/results/results.json`).")
