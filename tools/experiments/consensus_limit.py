@@ -57,6 +57,15 @@ the book's VGAI until the camera model), by label."""
 from vgai_lite.flocking import velocity_variance  # noqa: E402
 
 TIMES = (2.0, 5.0)
+RESAMPLES = 2000
+
+
+def median_ci95(x: torch.Tensor, resamples: int = RESAMPLES, seed: int = 0) -> list:
+    """Bootstrap 95 % interval of the median of per-flight values x (episodes,): the interval
+    ``findings.compare`` reads (key ``ci95``), so a gain or a forcing is told apart by the book's one rule."""
+    idx = torch.randint(len(x), (resamples, len(x)), generator=torch.Generator().manual_seed(seed))
+    meds = x[idx].median(dim=1).values
+    return [round(float(meds.quantile(0.025)), 5), round(float(meds.quantile(0.975)), 5)]
 
 
 @torch.no_grad()
@@ -90,7 +99,9 @@ def damping_and_forcing(controller, cfg: FlockConfig, episodes: int = 10, seed: 
         out[f"{t:g}s"] = {"velocity_variance_median": float(var.median()),
                           "relative_speed_rms_median": float(var.sqrt().median()),
                           "damping_gain_median": float(gamma.median()),
+                          "damping_gain_median_ci95": median_ci95(gamma),
                           "forcing_at_rest_rms_median": float(force.median()),
+                          "forcing_at_rest_rms_median_ci95": median_ci95(force),
                           "balance_variance_median": float(((force / gamma.clamp(min=1e-6)) ** 2).median())}
     return out
 
