@@ -52,7 +52,7 @@ deg = A.sum(-1)
 fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
 draw_swarm(axes[0], r0, cfg=cfg)
 axes[0].set_title(f"the graph at t = 0: {int(A[0].sum()) // 2} links")
-axes[1].hist(deg.flatten().numpy(), bins=np.arange(0, int(deg.max()) + 2) - 0.5, color="tab:green")
+axes[1].hist(deg.flatten().numpy(), bins=np.arange(0, int(deg.max()) + 2) - 0.5, color="0.45")  # gray: no controller
 axes[1].set_xlabel("number of neighbours |N_i|"), axes[1].set_ylabel("agents")
 axes[1].set_title(f"degrees over {len(r0)} initial swarms (every agent has >= 2)")
 plt.tight_layout()

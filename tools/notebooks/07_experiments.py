@@ -81,7 +81,7 @@ assert prov["reproduce_config"]["seed"] == TEST_SEED, "the tables are reported o
 # * **Our simulator is not AirSim**: ours are the paper's stated double integrators and our own
 #   renderer. Numbers need not match; the findings should.
 # * **Which VGAI.** Every VGAI row flies one of the VGAIs the book ships (F = 6, 12, 24 and
-#   K - 1 = 1, 2, 3); a cell flown by a VGAI of another recipe than the book's is marked †. The row
+#   K - 1 = 1, 2, 3), all trained with the book's recipe (the next cell checks it). The row
 #   *VGAI (retrained)* of Table 2b is trained at each radius (`reproduce --extras`).
 
 # %%
@@ -231,8 +231,10 @@ display(Markdown("| finding | paper | ours | our numbers (95% interval) |\n|---|
 # %%
 bounds = []
 if below_expert:
-    bounds.append("**The expert is not a lower bound here.** Some controllers' costs lie below the expert's by more "
-                  "than their intervals (the last rows above). The expert of eq. 2 is saturated at ±30 m/s² and "
+    bounds.append(f"**The expert is not a lower bound here.** {len(below_expert)} "
+                  f"cell{'s lie' if len(below_expert) > 1 else ' lies'} below the expert's cost by more than "
+                  f"{'their intervals' if len(below_expert) > 1 else 'its interval'} (the table's row on the expert). "
+                  "The expert of eq. 2 is saturated at ±30 m/s² and "
                   "aligns with a fixed gain; eq. 1 only scores velocity disagreement, so a rule that aligns harder "
                   "early can beat it (notebook 03, section 10, beats it with local rules of larger gains), and with "
                   "a larger radius a decentralized controller hears enough neighbours to do so.")
@@ -460,10 +462,10 @@ def flock_word(x):
     return "flocked" if flocked(x) else "did not flock"
 
 
-def falls(trend):
-    return {findings.HOLDS: "every step a fall beyond the intervals",
-            findings.CANNOT_TELL: "not every step beyond the intervals",
-            findings.CONTRADICTED: "a rise beyond the intervals"}[trend]
+def steps(table, row):
+    """Each step of a row by the book's one rule: '6 → 12 higher, 12 → 24 within the intervals'."""
+    cols, cs = cells_of(table, row)
+    return findings.steps_text(cs, [f"{c:g}" for c in cols])
 
 
 paper_test = {s: json.loads((DATA_DIR / "test" / f"vgai_paper_seed{s}.json").read_text()) for s in PAPER_SEEDS}
@@ -497,8 +499,8 @@ bullets = [
     f"its {len(paper_test)} training seeds, {sum(flocked(r) for r in paper_test.values())} of which flocked (one gray "
     "frame shows no motion; notebook 11). The VGAI row of these tables is the book's recipe, the paper's method with "
     "the departures notebook 11 leaves out one at a time, so it is not the paper's VGAI reproduced. "
-    f"Its trends in F and K, from one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({falls(F_trend)}), K - 1 = 1, 2, 3 give "
-    f"{series('K', 'VGAI')} ({falls(K_trend)}); notebook 11's three training seeds of one configuration show how far "
+    f"Its trends in F and K, from one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({steps('F', 'VGAI')}), K - 1 = 1, 2, 3 give "
+    f"{series('K', 'VGAI')} ({steps('K', 'VGAI')}); notebook 11's three training seeds of one configuration show how far "
     "one training lands from the next. "
     + cheaper_than_default(),
     f"* **At R = 1 m, VGAI (trained at 1.5 m) costs {v1['relative_cost_mean']:.2f}**, against the DAGNN's "
@@ -519,7 +521,8 @@ bullets = [
     f"{dr1['share_connected_at_end']:.0%} connected). Most of eq. 1 accrues in the first second, so these costs "
     "rank how well each controller braked early, not whether its drones ended up flying as one. "
     "From 1.5 to 2 m VGAI's cost moves from "
-    f"{v15['relative_cost_mean']:.2f} to {v2['relative_cost_mean']:.2f} ({falls(findings.trend([v15, v2], -1))}).",
+    f"{v15['relative_cost_mean']:.2f} to {v2['relative_cost_mean']:.2f} ("
+    + {-1: "lower", 0: "within the intervals", 1: "higher"}[findings.compare(v2, v15)] + ").",
     "* **Initial velocity**: the paper's VGAI finds slow starts easier; ours costs "
     + ", ".join(f"{x['relative_cost_mean']:.2f}" for x in vv) + " at v_init = "
     + ", ".join(f"{c:g}" for c in TABLES["v_init"]["columns"]) + " m/s ("
@@ -538,20 +541,32 @@ bullets = [
 ]
 display(Markdown("\n".join(bullets)))
 
+# %%
+d2, l1_ = cell("R", "DAGNN", 2.0), cell("R", "Local", 1.0)
+dv, drv, lv = (cells_of("v_init", r)[1] for r in ("DAGNN", "DAGNN (retrained)", "Local"))
+v_labels = [f"{c:g}" for c in cells_of("v_init", "DAGNN")[0]]
+lo2, hi2 = findings.interval(d2)
+display(Markdown("\n".join([
+    "* **Our DAGNN and the paper's.** Our simulator is exactly the model the expert and the DAGNN assume (a noiseless "
+    "double integrator, exact relative positions and velocities, no latency); imitation is easier when the expert's "
+    f"model is the world. At R = 2 m our DAGNN scores {d2['relative_cost_mean']:.2f} ({lo2:.2f}-{hi2:.2f}), "
+    + ("below the expert's 1 beyond its interval: the expert is a hand-designed potential field, not the minimiser of "
+       "eq. 1." if hi2 < 1 else "not below the expert's 1 beyond its interval."),
+    "* **The radius table.** Our rows DAGNN and VGAI are trained at R = 1.5 m and flown at 1.0 and 2.0; the paper does "
+    "not say whether it retrained, so the row *DAGNN (retrained)* trains one at each radius. In our 12 × 128 panorama a "
+    "5 cm drone 2 m away spans about one column and the fog fades it (contrast e^(-d/4)): the distant neighbours a 2 m "
+    "radius adds are the ones the CNN sees worst. Our local heuristic costs "
+    f"{l1_['relative_cost_mean']:.2f} at R = 1 m against the paper's {PAPER['R']['Local'][1.0]:.2f} (notebook 01 shows "
+    "how sensitive it is to ρ).",
+    f"* **Initial velocity.** Our DAGNN's row, step by step: {findings.steps_text(dv, v_labels)}; retrained at each "
+    f"v_init, at the slowest start it costs {drv[0]['relative_cost_mean']:.2f} against the default one's "
+    f"{dv[0]['relative_cost_mean']:.2f} ("
+    + {-1: "lower", 0: "within the intervals", 1: "higher"}[findings.compare(drv[0], dv[0])]
+    + f"). Our local heuristic's *relative* cost, step by step: {findings.steps_text(lv, v_labels)} (its absolute "
+    "cost and the expert's are in the cell above).",
+])))
+
 # %% [markdown]
-# * **Our DAGNN is better than the paper's.** Our simulator is exactly the model the expert and the
-#   DAGNN assume (a noiseless double integrator, exact relative positions and velocities, no
-#   latency); imitation is easier when the expert's model is the world. At $R = 2$ m our DAGNN even
-#   scores below 1: the expert is a hand-designed potential field, not the minimiser of eq. 1.
-# * **The radius table.** Our rows DAGNN and VGAI are trained at $R = 1.5$ and flown at 1.0 and 2.0;
-#   the paper does not say whether it retrained, so the row *DAGNN (retrained)* trains one at each
-#   radius. In our 12 × 128 panorama a 5 cm drone 2 m away spans about one column and the fog fades
-#   it (contrast $e^{-d/4}$): the distant neighbours a 2 m radius adds are the ones the CNN sees
-#   worst. Our local heuristic collapses at $R = 1$ m much more than the paper's (notebook 01 shows
-#   how sensitive it is to $\rho$).
-# * **Initial velocity.** Our DAGNN's row does not rise steadily with $v_{init}$, and retrained on
-#   slow starts it does worse there than the default one (the line above). Our local heuristic's
-#   *relative* cost falls as $v_{init}$ grows: the expert's cost grows faster (the cell above).
 # * **Spread.** Differences smaller than the intervals are not evidence either way. An interval is
 #   over episodes only: one training per cell leaves out how far one training lands from the next
 #   (notebook 11 flies three seeds of the book's VGAI).
@@ -630,8 +645,8 @@ display(prose("The expert itself does not flock at N' = 200: sampled at Ts it mu
       r50=srt["N=50"]["velocity_variance_median"]["5s"], r200=srt["N=200"]["velocity_variance_median"]["5s"],
       rc200=srt["N=200"]["share_connected_at_end"],
       best="Flocked at N' = 200: {}. Flocked at both N = 50 and N' = 100: {}.".format(
-          ", ".join(l for l, c in team_recs.items() if flocked(c["N=200"])) or "none",
-          ", ".join(l for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none")))
+          "; ".join(f"*{l}*" for l, c in team_recs.items() if flocked(c["N=200"])) or "none",
+          "; ".join(f"*{l}*" for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none")))
 k6, pnt = team_recs["K − 1 = 5 exchanges, R in [1, 2] m"], team_recs["features per neighbour (N = 50, R = 1.5 m; notebook 03)"]
 prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 5 and R drawn in training it is connected "
       "at 5 s in {k6c:.0%} of episodes. What changes the picture is the features' scale: divided by each drone's "
@@ -700,8 +715,8 @@ prose("Trained over teams and radii (`vgai_variant.py --teams 50,100 --radii 1.0
                      f"{vt[c]['share_connected_at_end']:.0%})" for c in team_cols))
 
 # %% [markdown]
-# What favours ours. The list above explains why ours might differ; these are the advantages the
-# paper's VGAI did not have, each measured where the book can:
+# How our VGAI's world differs from the paper's. The list above explains why ours might differ;
+# these are what the paper's VGAI did not have, each measured where the book can:
 
 # %%
 gray = json.loads((DATA_DIR / "experiments" / f"{chosen_camera_runs()['gray only']}.json").read_text())
@@ -714,13 +729,15 @@ yes = {True: "flocked", False: "did not flock"}
 below_3 = [(t, row, c, x) for t in TABLES for row, xs in results["tables"][t]["rows"].items() for c in TABLES[t]["columns"]
            if (x := xs.get(str(c))) and x["relative_cost_mean"] < 3 and "velocity_variance_median" in x]
 not_flocking = [(t, row, c, x) for t, row, c, x in below_3 if not flocked(x)]
-one_frame = json.loads((DATA_DIR / "experiments" / f"{LEAVE_ONE_OUT['the second frame'][0]}.json").read_text())
+load_exp = lambda name: json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text())
+one_frame = load_exp(LEAVE_ONE_OUT["the second frame"][0])
+no_aux = load_exp(LEAVE_ONE_OUT["the state-estimation loss in stage 3"][0])
 cam_test = json.loads((DATA_DIR / "experiments" / "vgai_depthcam_test_cameras.json").read_text())["settings"]
 authors = f"noise{10 / 255:.4g}"
 prose("* **Two frames.** The paper's CNN takes one image per step; ours also takes a motion channel from the frame "
       "g steps earlier, so a drone measures its neighbours' relative velocities instead of inferring them (notebook 05 "
-      "measures the single-frame estimator beside the two-frame one). Without the second frame the book's recipe on "
-      "clean frames costs {of:.2f} on the validation episodes, variance at 5 s {ov:.1e} m²/s² ({oflock}; notebook 11).\n"
+      "measures the single-frame estimator beside the two-frame one). Without the second frame the book's recipe "
+      "costs {of:.2f} on the validation episodes, variance at 5 s {ov:.1e} m²/s² ({oflock}; notebook 11's leave-one-out).\n"
       "* **Renders through a camera model.** The authors fly theirs with noise of 10/255 and a 5 × 5 blur. The "
       "book's VGAI is trained through a camera model (noise, blur, exposure, a dead camera; notebook 08), and its "
       "training seed 0 costs {cc:.2f} on clean frames of the test episodes and {ca:.2f} at 10/255 ({cflock}). The "
@@ -731,7 +748,9 @@ prose("* **Two frames.** The paper's CNN takes one image per step; ours also tak
       "with depth {dc:.2f} and {dv:.1e} ({df}), on the same {ep} validation episodes (both through the camera, "
       "notebook 08). {gverdict}\n"
       "* **Supervision on the exact features.** Stage 1 fits the CNN to the exact local features and stage 3 keeps "
-      "a state-estimation loss beside eq. 10's (notebooks 05 and 06); the paper trains its CNN from the actions only.\n"
+      "a state-estimation loss beside eq. 10's (notebooks 05 and 06); the paper trains its CNN from the actions only. "
+      "Without the state-estimation loss in stage 3 the book's recipe costs {ac:.2f}, variance at 5 s {av:.1e} m²/s² "
+      "({aflock}; the same validation episodes).\n"
       "* **A noiseless simulator** whose dynamics are the expert's model (the DAGNN bullet above).\n"
       "* **Local is calibrated, not in agreement.** The potential's radius and the initial disc were chosen "
       "(notebook 01) so that the local heuristic costs about the paper's {pl:.2f}; ours costs {l3:.2f}, "
@@ -739,7 +758,12 @@ prose("* **Two frames.** The paper's CNN takes one image per step; ours also tak
       "* **The paper's criterion.** \"Relative cost below 3\" is not flocking here: the recipe on clean frames "
       "without the learner flying alone costs {mc:.2f} on the test episodes and its velocity variance at 5 s is {mv:.1e} "
       "m²/s², {mx:.0f}× the book's threshold ({mf}); so do {nc} of the {nt} cells of the tables above that cost "
-      "less than 3 ({cases}); notebook 09 lists every such case.",
+      "less than 3 ({cases}); notebook 09 lists every such case.\n\n"
+      "What the book's VGAI needs to flock, by notebook 11's leave-one-out (the book's recipe without one departure "
+      "at a time, validation episodes, clean frames): {needs} Through a camera's noise the camera model is needed too: "
+      "trained without it, the recipe no longer flocks at σ = {ks:g}.",
+      ac=no_aux["relative_cost_mean"], av=no_aux["velocity_variance_median"]["5s"], aflock=yes[flocked(no_aux)],
+      needs=findings.needs({d: load_exp(name) for d, (name, _) in LEAVE_ONE_OUT.items()}),
       of=one_frame["relative_cost_mean"], ov=one_frame["velocity_variance_median"]["5s"], oflock=yes[flocked(one_frame)],
       cc=cam_test["clean"]["relative_cost_mean"], ca=cam_test[authors]["relative_cost_mean"],
       cflock="; ".join(f"{flock_word(x)}, variance at 5 s {variance_text(x['velocity_variance_median']['5s'])} m²/s²"
@@ -760,10 +784,10 @@ prose("* **Two frames.** The paper's CNN takes one image per step; ours also tak
 # * Every table comes from one command; its cells are cached and resumable, and each carries its provenance.
 # * A difference within the confidence intervals, or within the spread over training seeds, is not evidence either way.
 #
-# ## What's next
+# ## Next
 #
-# * More training seeds for VGAI (`--vgai-seeds 3`) would give the VGAI rows a spread over training;
-#   the [appendix](10_appendix_ray.ipynb) says how long that takes on several machines, with Ray.
+# * `reproduce --vgai-seeds 3` trains three seeds per VGAI row, which gives the rows a spread over
+#   training; the [appendix](10_appendix_ray.ipynb) runs such sweeps on several machines, with Ray.
 # * [Notebook 08](08_robustness.ipynb) flies the same controllers in harsher worlds: noisy and dead
 #   cameras, lost and late messages; notebook 09 lists the open problems.
 

@@ -674,12 +674,9 @@ pos_big = robustness.find(results, "DAGNN", (("position_noise", 0.2),))
 n02 = robustness.find(results, "VGAI", (("image_noise", 0.02),))
 from vgai_lite.evaluate import as_safe_as_expert
 
-SPLIT = 0.2
-"""A drop in the share of connected episodes this large (20 points) is what this sweep calls a split: with
-20 episodes per cell, a difference of one or two episodes is not a finding."""
+split_word = lambda perturbed, base: ("splits its swarm" if findings.compare_connected(perturbed, base) < 0
+                                      else "keeps its swarm together")  # intervals of the connected shares apart
 cost_word = {-1: "lowers its cost", 0: "leaves its cost within the interval", 1: "raises its cost"}
-split_word = lambda perturbed, base: ("splits its swarm" if base["share_connected_at_end"] - perturbed["share_connected_at_end"] >= SPLIT
-                                      else "keeps its swarm together")
 prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.2f}; connected at 5 s in {dlc:.0%} of "
       "episodes) and {vw} for VGAI ({vl:.2f}, clean {vc:.2f}), which {vs} (connected in {vlc:.0%} of episodes, clean "
       "{vcc:.0%}). One step of extra delay: DAGNN {dd:.2f}, VGAI {vd:.2f} (connected in {vdc:.0%}). Both lean on their "

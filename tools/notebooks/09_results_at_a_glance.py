@@ -37,22 +37,30 @@ def load(rel):
 # ## 1. Every controller, on the test episodes
 #
 # "Bytes per step" is what a drone broadcasts to its neighbours at every step: $(K-1)\,F$ numbers of
-# 4 bytes (notebook 07). Training minutes are as each training recorded on this 2-core machine.
+# 4 bytes (notebook 07). Training minutes are as each training recorded on this 2-core machine, with
+# how it ran: alone, or one of two trainings side by side at one thread each.
 
 # %%
 dagnn_t, vgai_t = DAGNN_RUNS["dagnn_K4"], VGAI_RUNS["vgai_F24"]
 dagnn_rec, vgai_rec = load("dagnn/dagnn_K4.json"), load("vgai/vgai_F24.json")
-vgai_minutes = training_minutes(vgai_rec)
 gray_name = chosen_camera_runs()["gray only"]
+
+
+def minutes(rec, fmt=".0f"):
+    """A training's recorded minutes, with how it ran (threads; alone or sharing the two cores)."""
+    how = how_trained(rec)
+    return f"{training_minutes(rec):{fmt}}" + (f" ({how})" if how else "")
+
+
 ROWS = [("Centralized expert", "everyone's positions and velocities", None, 1.0, "—", "—"),
         ("Local heuristic", "its neighbours' positions and velocities", "local", PAPER["R"]["Local"][1.5], "0", "—"),
         ("DAGNN, K-1 = 3", "exact local features, neighbours' messages", "dagnn_K4", PAPER["R"]["DAGNN"][1.5],
-         f"{(dagnn_t.K - 1) * 6 * 4}", f"{dagnn_rec['train_seconds'] / 60:.1f}"),
+         f"{(dagnn_t.K - 1) * 6 * 4}", minutes(dagnn_rec, ".1f")),
         ("VGAI, F = 24, K-1 = 3 (the book's recipe, trained through a camera model)",
          "its own images, neighbours' messages", "vgai_F24",
-         PAPER["R"]["VGAI"][1.5], f"{(vgai_t.K - 1) * vgai_t.F * 4}", f"{vgai_minutes:.0f}"),
+         PAPER["R"]["VGAI"][1.5], f"{(vgai_t.K - 1) * vgai_t.F * 4}", minutes(vgai_rec)),
         ("VGAI, the same recipe trained on clean frames (training seed 0)", "the same", "vgai_clean", None,
-         f"{(vgai_t.K - 1) * vgai_t.F * 4}", f"{training_minutes(load('experiments/vgai_clean_seed0.json')):.0f}"),
+         f"{(vgai_t.K - 1) * vgai_t.F * 4}", minutes(load("experiments/vgai_clean_seed0.json"))),
         ("VGAI on clean frames without the learner flying alone", "the same", "vgai_F24_mixture", None,
          f"{(vgai_t.K - 1) * vgai_t.F * 4}", "—"),
         ("Modular vision pilot (a state estimator trained alone, feeding the DAGNN's MLP)",
@@ -60,10 +68,10 @@ ROWS = [("Centralized expert", "everyone's positions and velocities", None, 1.0,
         ("VGAI trained through the camera, gray only: the paper's sensor (notebook 08's choice)",
          "its own gray frames, neighbours' messages", gray_name, PAPER["R"]["VGAI"][1.5],
          f"{(vgai_t.K - 1) * vgai_t.F * 4}",
-         f"{training_minutes(load(f'experiments/{gray_name}.json')):.0f}"),
+         minutes(load(f"experiments/{gray_name}.json"))),
         *[(f"The paper's VGAI as described (one gray frame, from random weights), training seed {s}",
            "its own gray frames, neighbours' messages", f"vgai_paper_seed{s}", PAPER["R"]["VGAI"][1.5],
-           f"{(PAPER_T.K - 1) * PAPER_T.F * 4}", f"{training_minutes(load(f'experiments/vgai_paper_seed{s}.json')):.0f}")
+           f"{(PAPER_T.K - 1) * PAPER_T.F * 4}", minutes(load(f"experiments/vgai_paper_seed{s}.json")))
           for s in PAPER_SEEDS]]
 test = {name: load(f"test/{name}.json") for _, _, name, *_ in ROWS if name}
 rows = []
@@ -84,7 +92,7 @@ display(Markdown(f"{first['episodes']} test episodes (seed {first['seed']}), N =
                  "bytes per step | training [min] |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)))
 
 # %%
-v, d, l, m, pil = (test[n] for n in ("vgai_F24", "dagnn_K4", "local", "vgai_F24_mixture", "pilot"))
+v, d, l, pil = (test[n] for n in ("vgai_F24", "dagnn_K4", "local", "pilot"))
 order = {-1: "below", 1: "above", 0: "within the intervals of"}
 paper_costs = [test[f"vgai_paper_seed{s}"]["relative_cost_mean"] for s in PAPER_SEEDS]
 display(prose("On these episodes the DAGNN is {dv} VGAI and VGAI is {vl} the local heuristic (the paper: DAGNN < VGAI < Local), "
@@ -96,10 +104,9 @@ display(prose("On these episodes the DAGNN is {dv} VGAI and VGAI is {vl} the loc
       dv=order[compare(d, v)], vl=order[compare(v, l)],
       vc=v["relative_cost_mean"], vp=PAPER["R"]["VGAI"][1.5], dc=d["relative_cost_mean"], dp=PAPER["R"]["DAGNN"][1.5],
       plo=min(paper_costs), phi=max(paper_costs),
-      flock=("A swarm that sees only images and talks to its neighbours flocks: at 5 s its drones' velocities "
-             "differ by {rms:.3f} m/s RMS, against {mrms:.3f} m/s for the recipe on clean frames without the learner "
-             "flying alone."
-             .format(rms=v["velocity_variance_median"]["5s"] ** 0.5, mrms=m["velocity_variance_median"]["5s"] ** 0.5)
+      flock=("A swarm that sees only its own camera images (gray and depth) and talks to its neighbours flocks: at 5 s "
+             "its drones' velocities differ by {rms:.3f} m/s RMS (variance {var:.1e} m²/s²)."
+             .format(rms=v["velocity_variance_median"]["5s"] ** 0.5, var=v["velocity_variance_median"]["5s"])
              if flocked(v) else "But the book's VGAI does not flock by the book's definition.")))
 display(prose("The paper's central claim is that the CNN and the GNN trained together beat a pipeline of parts trained "
               "apart. The modular vision pilot is that pipeline: the same kind of CNN trained alone to estimate the six "
@@ -107,9 +114,10 @@ display(prose("The paper's central claim is that the CNN and the GNN trained tog
               "at 5 s {pv:.1e} m²/s²); VGAI, trained end to end, costs {vc:.2f} (variance at 5 s {vv:.1e}) and is {order} it: "
               "{verdict}. {tighter}",
               vv=v["velocity_variance_median"]["5s"],
-              tighter=("The pipeline's swarm settles tighter than VGAI's, so on the flock itself the paper's claim does not "
-                       "hold here." if pil["velocity_variance_median"]["5s"] < v["velocity_variance_median"]["5s"] else
-                       "VGAI's swarm also settles tighter than the pipeline's."),
+              tighter=("Both swarms flock (the variance a label, not a ranking: a median over episodes, without an "
+                       "interval), so on the flock itself the two cannot be told apart." if flocked(pil) and flocked(v) else
+                       "Only the pipeline's swarm flocks." if flocked(pil) else "Only VGAI's swarm flocks." if flocked(v)
+                       else "Neither swarm flocks."),
               pc=pil["relative_cost_mean"], plo=pil["relative_cost_mean_ci95"][0], phi=pil["relative_cost_mean_ci95"][1],
               pfl="flocks" if flocked(pil) else "does not flock", pv=pil["velocity_variance_median"]["5s"],
               vc=v["relative_cost_mean"], order=order[compare(v, pil)],
@@ -157,10 +165,11 @@ prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than
 # **What favours our numbers.**
 #
 # * **Depth.** Our drones see a gray channel *and* a depth channel; the paper's cameras give images
-#   only. Trained without depth, the book's recipe does not flock (notebook 11; below).
+#   only. What the recipe does without depth is measured below (and in notebook 11's leave-one-out).
 # * **Two frames.** Our CNN sees each frame beside its difference with the frame 5 steps earlier;
 #   the paper's takes one frame, which shows where the neighbours are but not how they move
-#   (notebook 05, section 3). The paper's VGAI with its one frame is measured in notebook 11.
+#   (notebook 05, section 3). The paper's VGAI with its one frame is measured in notebook 11, and the
+#   book's recipe with one frame below.
 # * **Noiseless renders in the tables.** The book's VGAI is trained through a camera model (sensor
 #   noise, blur, exposure, a dead camera; notebook 08), but the tables of notebook 07 fly it on clean
 #   frames, as the paper's renders are; notebook 08 flies it through the paper's own test perturbations.
@@ -181,20 +190,22 @@ prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than
 gray, seed0 = load("experiments/vgai_learner_gray.json"), load(f"experiments/{CLEAN_SEED_RUNS[0]}.json")
 gray_cam, depth_cam = load(f"experiments/{gray_name}.json"), load(f"experiments/{CAMERA_SEED_RUNS[0]}.json")
 yn = lambda rec: "yes" if flocked(rec) else "no"
-display(prose("The depth channel, measured (validation episodes, training seed 0): on clean frames, with gray and depth the "
-      "recipe ends at {d5:.1e} m²/s² at 5 s (flocked: {df}), with the gray channel only at {g5:.1e} (flocked: {gf}), at a "
-      "cost of {gc:.2f} against {dc:.2f}; through the camera, {dc5:.1e} (flocked: {dcf}) against {gc5:.1e} (flocked: "
-      "{gcf}), {gcc:.2f} against {dcc:.2f}.", d5=seed0["velocity_variance_median"]["5s"], df=yn(seed0),
+display(prose("The depth channel, measured ({ep} validation episodes, training seed 0): trained on clean frames, with gray "
+      "and depth the recipe costs {dc:.2f} and ends at {d5:.1e} m²/s² at 5 s (flocked: {df}), with the gray channel only "
+      "{gc:.2f} and {g5:.1e} (flocked: {gf}); trained through the camera, with gray and depth {dcc:.2f} and {dc5:.1e} "
+      "(flocked: {dcf}), with gray only {gcc:.2f} and {gc5:.1e} (flocked: {gcf}).", ep=depth_cam["episodes"], d5=seed0["velocity_variance_median"]["5s"], df=yn(seed0),
       g5=gray["velocity_variance_median"]["5s"], gf=yn(gray), gc=gray["relative_cost_mean"], dc=seed0["relative_cost_mean"],
       dc5=depth_cam["velocity_variance_median"]["5s"], dcf=yn(depth_cam), gc5=gray_cam["velocity_variance_median"]["5s"],
       gcf=yn(gray_cam), gcc=gray_cam["relative_cost_mean"], dcc=depth_cam["relative_cost_mean"]))
 one = load(f"experiments/{LEAVE_ONE_OUT['the second frame'][0]}.json")
-display(prose("The second frame, measured the same way: with one frame per step (no motion channel) the recipe on clean frames "
+display(prose("The second frame, measured the same way: with one frame per step (no motion channel) the book's recipe "
               "ends at {o5:.1e} m²/s² at 5 s (flocked: {of}), at a cost of {oc:.2f}.", o5=one["velocity_variance_median"]["5s"],
               of="yes" if flocked(one) else "no", oc=one["relative_cost_mean"]))
-display(prose("What VGAI's flocking needs, by notebook 11's leave-one-out (the recipe on clean frames, validation "
-              "episodes): {s}", s=needs(
-    {d: load(f"experiments/{name}.json") for d, (name, _) in LEAVE_ONE_OUT.items()})))
+display(prose("What VGAI's flocking needs, by notebook 11's leave-one-out (the book's recipe, validation "
+              "episodes, clean frames): {s} Through a camera's noise the camera model is needed too: trained without "
+              "it, the recipe no longer flocks at σ = {b:g} (notebook 08).", s=needs(
+    {d: load(f"experiments/{name}.json") for d, (name, _) in LEAVE_ONE_OUT.items()}),
+    b=noise_that_breaks(load(f"experiments/{CLEAN_SEED_RUNS[0]}_cameras.json")["settings"])))
 
 # %% [markdown]
 # ## 4. What is still open
@@ -226,7 +237,7 @@ items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "
     f"the gray channel only, trained on clean frames, it {does(gray)} (variance at 5 s "
     f"{gray['velocity_variance_median']['5s']:.1e} m²/s²), and trained through the camera it "
-    f"{does(cams['gray only']['clean'])} (validation episodes, clean frames: "
+    f"{does(cams['gray only']['clean'])} ({cams['gray only']['clean']['episodes']} validation episodes, clean frames: "
     f"{cams['gray only']['clean']['relative_cost_mean']:.2f}, variance at 5 s "
     f"{cams['gray only']['clean']['velocity_variance_median']['5s']:.1e} m²/s², connected in "
     f"{cams['gray only']['clean']['share_connected_at_end']:.0%}; trained from a second seed, "
@@ -254,7 +265,7 @@ items = [
     f"{cams['gray + depth']['clean']['relative_cost_mean']:.2f} on clean frames and "
     f"{cams['gray + depth'][authors]['relative_cost_mean']:.2f} at the authors' noise of 10/255, the gray-only VGAI "
     f"{cams['gray only']['clean']['relative_cost_mean']:.2f} and {cams['gray only'][authors]['relative_cost_mean']:.2f} "
-    f"(validation episodes; variance at 5 s " + ", ".join(
+    f"({cams['gray only']['clean']['episodes']} validation episodes; variance at 5 s " + ", ".join(
         f"{c[k]['velocity_variance_median']['5s']:.1e}" for c in cams.values() for k in ("clean", authors))
     + f" m²/s² in that order, so flocked in {cam_flocked} of these four). "
     + ("At 10/255 the noise costs each of them at most a quarter of its clean cost"
