@@ -760,7 +760,7 @@ prose("* **Two frames.** The paper's CNN takes one image per step; ours also tak
       "m²/s², {mx:.0f}× the book's threshold ({mf}); so do {nc} of the {nt} cells of the tables above that cost "
       "less than 3 ({cases}); notebook 09 lists every such case.\n\n"
       "What the book's VGAI needs to flock, by notebook 11's leave-one-out (the book's recipe without one departure "
-      "at a time, validation episodes, clean frames): {needs} Through a camera's noise the camera model is needed too: "
+      "at a time, one training each from seed 0, validation episodes, clean frames): {needs} Through a camera's noise the camera model is needed too: "
       "trained without it, the recipe no longer flocks at σ = {ks:g}.",
       ac=no_aux["relative_cost_mean"], av=no_aux["velocity_variance_median"]["5s"], aflock=yes[flocked(no_aux)],
       needs=findings.needs({d: load_exp(name) for d, (name, _) in LEAVE_ONE_OUT.items()}),

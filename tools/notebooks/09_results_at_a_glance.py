@@ -201,8 +201,8 @@ one = load(f"experiments/{LEAVE_ONE_OUT['the second frame'][0]}.json")
 display(prose("The second frame, measured the same way: with one frame per step (no motion channel) the book's recipe "
               "ends at {o5:.1e} m²/s² at 5 s (flocked: {of}), at a cost of {oc:.2f}.", o5=one["velocity_variance_median"]["5s"],
               of="yes" if flocked(one) else "no", oc=one["relative_cost_mean"]))
-display(prose("What VGAI's flocking needs, by notebook 11's leave-one-out (the book's recipe, validation "
-              "episodes, clean frames): {s} Through a camera's noise the camera model is needed too: trained without "
+display(prose("What VGAI's flocking needs, by notebook 11's leave-one-out (the book's recipe without one departure "
+              "at a time, one training each from seed 0, validation episodes, clean frames): {s} Through a camera's noise the camera model is needed too: trained without "
               "it, the recipe no longer flocks at σ = {b:g} (notebook 08).", s=needs(
     {d: load(f"experiments/{name}.json") for d, (name, _) in LEAVE_ONE_OUT.items()}),
     b=noise_that_breaks(load(f"experiments/{CLEAN_SEED_RUNS[0]}_cameras.json")["settings"])))
