@@ -95,16 +95,28 @@ DEPARTURES: dict[str, frozenset] = {
 ``VGAITrainConfig`` it may set (a test checks that every leave-one-out training differs from its recipe in
 these alone; the depth channel's camera differs only where the recipe's gives depth a range error)."""
 
-LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {
-    "the second frame": ("vgai_depthcam_one_frame", "no motion channel, so no odd motion features"),
-    "the depth channel": ("vgai_camera_narrow_gray", "gray and its motion channel"),
-    "the state-estimation loss in stage 3": ("vgai_depthcam_no_aux", "eq. 10 alone in the joint training"),
-    "the synthetic relative velocities": ("vgai_depthcam_no_synthetic", "stage 1 on the expert's states alone"),
-    "the odd motion features": ("vgai_depthcam_no_odd", "a plain CNN"),
-    "the learner flying alone": ("vgai_depthcam_no_learner", "DAgger's mixture only"),
-    "the warm starts": ("vgai_depthcam_no_warm", "joint BPTT from random weights"),
-    "the camera model": (CLEAN_SEED_RUNS[0], "clean frames in training"),
+LEFT_WITHOUT: dict[str, str] = {
+    "the second frame": "no motion channel, so no odd motion features",
+    "the depth channel": "gray and its motion channel",
+    "the state-estimation loss in stage 3": "eq. 10 alone in the joint training",
+    "the synthetic relative velocities": "stage 1 on the expert's states alone",
+    "the odd motion features": "a plain CNN",
+    "the learner flying alone": "DAgger's mixture only",
+    "the warm starts": "joint BPTT from random weights",
+    "the camera model": "clean frames in training",
 }
+"""What a recipe keeps when a departure is taken back (the leave-one-out tables' labels)."""
+
+LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {d: (name, LEFT_WITHOUT[d]) for d, name in {
+    "the second frame": "vgai_depthcam_one_frame",
+    "the depth channel": "vgai_camera_narrow_gray",
+    "the state-estimation loss in stage 3": "vgai_depthcam_no_aux",
+    "the synthetic relative velocities": "vgai_depthcam_no_synthetic",
+    "the odd motion features": "vgai_depthcam_no_odd",
+    "the learner flying alone": "vgai_depthcam_no_learner",
+    "the warm starts": "vgai_depthcam_no_warm",
+    "the camera model": CLEAN_SEED_RUNS[0],
+}.items()}
 """The book's recipe (``BOOK``, through the camera: CAMERA_SEED_RUNS) without one of its departures from the
 paper at a time (training seed 0, the same 20 validation episodes, flown on clean frames): departure ->
 (data/experiments/NAME.json, what is left). The yardstick is the recipe over its three training seeds.
@@ -112,15 +124,15 @@ Notebook 11's leave-one-out table and the book's one sentence on what VGAI's flo
 (``findings.needs``). The team and radius randomisation is not a row: it is not part of the recipe
 (notebook 07: trained over teams and radii, VGAI transferred worse)."""
 
-LEAVE_ONE_OUT_CLEAN: dict[str, tuple[str, str]] = {
-    "the learner flying alone": ("vgai_F24_validation", "DAgger's mixture only"),
-    "the depth channel": ("vgai_learner_gray", "gray and its motion channel"),
-    "the warm starts": ("vgai_book_no_warm", "joint BPTT from random weights"),
-    "the second frame": ("vgai_book_one_frame", "no motion channel, so no odd motion features"),
-    "the odd motion features": ("vgai_book_no_odd", "a plain CNN"),
-    "the synthetic relative velocities": ("vgai_book_no_synthetic", "stage 1 on the expert's states alone"),
-    "the state-estimation loss in stage 3": ("vgai_book_no_aux", "eq. 10 alone in the joint training"),
-}
+LEAVE_ONE_OUT_CLEAN: dict[str, tuple[str, str]] = {d: (name, LEFT_WITHOUT[d]) for d, name in {
+    "the learner flying alone": "vgai_F24_validation",
+    "the depth channel": "vgai_learner_gray",
+    "the warm starts": "vgai_book_no_warm",
+    "the second frame": "vgai_book_one_frame",
+    "the odd motion features": "vgai_book_no_odd",
+    "the synthetic relative velocities": "vgai_book_no_synthetic",
+    "the state-estimation loss in stage 3": "vgai_book_no_aux",
+}.items()}
 """The same leave-one-out from the recipe on clean frames (``BOOK`` without ``BOOK_CAMERA``; CLEAN_SEED_RUNS,
 the book's recipe before the camera), trained first: notebook 11 sets it beside the one through the camera,
 which shows whether a departure's worth depends on the camera."""
