@@ -194,6 +194,20 @@ def test_a_miniature_vgai_training_changes_both_networks_and_saves_what_it_learn
         torch.testing.assert_close(loaded.model.state_dict()[k], t)
 
 
+def test_a_training_says_where_its_minutes_go():
+    """seconds_by_phase: every phase of the book's training timed, each positive, together no more than
+    the whole training (they do not overlap) and most of it (nothing slow left out)."""
+    cfg = FlockConfig(N=12, T=20)
+    _, hist = train_vgai(cfg, MINI, progress=False, check_episodes=1)
+    phases = hist["seconds_by_phase"]
+    assert set(phases) == {"round 0: the expert's flights", "stage 1: state estimation",
+                           "stage 2: the MLP on the CNN's features", "stage 3: rendering the windows",
+                           "stage 3: forward (CNN, aggregation, MLP)", "stage 3: backward and Adam step",
+                           "DAgger flights (rendering, CNN, physics)", "round checks (flights of the learner)"}
+    assert all(s > 0 for s in phases.values())
+    assert 0.8 * hist["seconds"] <= sum(phases.values()) <= hist["seconds"]
+
+
 def test_the_papers_vgai_learns_only_by_joint_bptt_from_random_weights(tmp_path):
     """warm_starts False (the paper's): no stage 1 or 2; joint BPTT on the expert's flights (round 0),
     then after each DAgger round; both networks move, and the MLP keeps its identity normalisation."""

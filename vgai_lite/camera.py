@@ -162,8 +162,7 @@ class CameraRanges:
         gain, offset: exposure, gain * I + offset.
         dead_share: the share of drones with one dead camera (which one, drawn too).
         depth_noise: a depth channel's relative range error (``range_noise``); e.g. 0.02, about a
-            commodity depth camera's at 2 m.
-    """
+            commodity depth camera's at 2 m."""
 
     noise: tuple = (0.0, 0.0)
     blur_deg: tuple = (0.0, 0.0)

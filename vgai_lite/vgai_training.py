@@ -1,25 +1,23 @@
 """Training VGAI, top to bottom: the CNN and the aggregation MLP together, by imitation with DAgger and
 K-step BPTT. Its configuration (every knob, with the paper's values) is ``vgai_config.VGAITrainConfig``.
 
-Introduced in notebook 06. Images are rendered on the fly from stored swarm states (no image dataset
-on disk; ``vision.stored_images``). The paper trains CNN_Psi and NN_Theta jointly end to end, by
-K-step backpropagation through time (its figure 3): for a window of K consecutive steps, every
-agent's K images go through the CNN, the features travel through the delayed aggregation (eq. 6),
-the MLP acts once at the last step, and the L1 loss of eq. 10 against the expert's action flows back
-through all K CNN passes (``bptt_loss``).
+Introduced in notebook 06. Images are rendered on the fly from stored swarm states (no image dataset on disk;
+``vision.stored_images``). The paper trains CNN_Psi and NN_Theta jointly end to end, by K-step backpropagation
+through time (its figure 3): for a window of K consecutive steps, every agent's K images go through the CNN, the
+features travel through the delayed aggregation (eq. 6), the MLP acts once at the last step, and the L1 loss of
+eq. 10 against the expert's action flows back through all K CNN passes (``bptt_loss``).
 
-The paper is silent on how long to train and on warm starts. The paper's VGAI (``warm_starts`` False)
-runs stage 0 and then stage 3 only, from random weights, first on the expert's flights. The book's,
-in three stages, sized for two CPU cores (``train_vgai``, at the bottom of this file; each record in
-``data/`` says how long it took):
+The paper is silent on how long to train and on warm starts. The paper's VGAI (``warm_starts`` False) runs stage 0
+and then stage 3 only, from random weights, first on the expert's flights. The book's, in three stages, sized for
+two CPU cores (``train_vgai``, at the bottom; each record says how long it took, by phase):
   0. the expert flies ``expert_episodes`` swarms alone (DAgger's round 0, ``imitation.EpisodeStore``);
-  1. visual state estimation (``fit_state_estimator``): the CNN, through a linear head, regresses the
-     DAGNN's N_LOCAL_FEATURES = 6 exact local features from single agents' images;
+  1. visual state estimation (``fit_state_estimator``): the CNN, through a linear head, regresses the DAGNN's
+     N_LOCAL_FEATURES = 6 exact local features from single agents' images;
   2. ``fit_mlp``: the MLP is fitted on Z(t) built from the (frozen) CNN's features, like the DAGNN;
   3. ``joint_round``: joint K-step BPTT of both on windows (``sample_windows``, ``window_batch``,
      ``bptt_loss``), after each DAgger round has added the learner's own flights.
-Loss L1 (eq. 10) and Adam at learning rate 1e-3 (the paper's) in every stage. Randomness comes from
-one ``torch.Generator`` seeded with ``tcfg.seed`` (sampling) and the seeded global RNG (the weights).
+Loss L1 (eq. 10) and Adam at learning rate 1e-3 (the paper's) in every stage. Randomness: one ``torch.Generator``
+seeded with ``tcfg.seed`` (sampling) and the seeded global RNG (the weights).
 """
 
 from __future__ import annotations
@@ -27,6 +25,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Optional, Union
 
@@ -57,6 +56,15 @@ def sample_times(n: int, T: int, tcfg: VGAITrainConfig, g: torch.Generator) -> t
     t_early = torch.randint(0, min(tcfg.early_steps, T), (n,), generator=g)
     t_any = torch.randint(0, T, (n,), generator=g)
     return torch.where(early, t_early, t_any)
+
+
+@contextmanager
+def timed(seconds: Optional[dict], phase: str):
+    """Add the ``with`` block's wall-clock seconds to ``seconds[phase]`` (unless None): a history's ``seconds_by_phase``."""
+    start = time.perf_counter()
+    yield
+    if seconds is not None:
+        seconds[phase] = seconds.get(phase, 0.0) + time.perf_counter() - start
 
 
 def pick(flights: list, gen: torch.Generator) -> Flights:
@@ -265,10 +273,11 @@ def joint_loss(model: VGAIModel, tcfg: VGAITrainConfig, w: dict) -> torch.Tensor
 
 
 def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, tcfg: VGAITrainConfig,
-                store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True, camera=None) -> list:
+                store: EpisodeStore, gen: torch.Generator, desc: str, progress: bool = True, camera=None,
+                seconds: Optional[dict] = None) -> list:
     """``tcfg.joint_steps`` steps of joint K-step BPTT on the stored flights, each window seen through
     cameras drawn from ``tcfg.camera`` (or through ``camera(frame, lag)`` when given); each step's windows
-    from one group of flights (``pick``, ``per_team``). Returns the losses."""
+    from one group of flights (``pick``, ``per_team``). Returns the losses; ``seconds`` gains the phases' times (``timed``)."""
     flights = store.groups()
     model.train()
     losses = []
@@ -281,10 +290,14 @@ def joint_round(model: VGAIModel, opt: torch.optim.Optimizer, cfg: FlockConfig, 
         if seen is None:
             cam = draw_camera(tcfg.camera, tcfg.vision.render, M, f.cfg.N, gen)
             seen = cam.repeat(tcfg.K).at(0) if cam is not None else None
-        loss = joint_loss(model, tcfg, window_batch(f.cfg, tcfg, f.r, f.v, f.u, e, t_end, seen))
-        opt.zero_grad(set_to_none=True)
-        loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
-        opt.step()
+        with timed(seconds, "stage 3: rendering the windows"):
+            w = window_batch(f.cfg, tcfg, f.r, f.v, f.u, e, t_end, seen)
+        with timed(seconds, "stage 3: forward (CNN, aggregation, MLP)"):
+            loss = joint_loss(model, tcfg, w)
+        with timed(seconds, "stage 3: backward and Adam step"):
+            opt.zero_grad(set_to_none=True)
+            loss.backward()  # through the MLP once and the CNN K times (K-step BPTT)
+            opt.step()
         losses.append(loss.item())
         bar.set_postfix(loss=f"{loss.item():.2f}")
     model.eval()
@@ -318,21 +331,17 @@ def dagger_round(learner: VGAIController, store: EpisodeStore, cfg: FlockConfig,
 def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
                checkpoint: Optional[Union[str, Path]] = None, progress: bool = True,
                check_episodes: int = 10, stage1: Callable = fit_stage1) -> tuple[VGAIController, dict]:
-    """Train VGAI in the three stages of the module docstring; save to ``checkpoint`` as it goes.
-
-    ``stage1``: the function that runs stage 1 (``fit_stage1``'s signature, returning its history
-    entries); ``vgai_lite.lab.stage1_cache`` passes one that reads a stage 1 trained before.
-
-    Returns the controller and its history: per stage the losses, and after stages 1-2 and every
-    DAgger round the relative cost on ``check_episodes`` episodes of the round check
-    (``imitation.round_check``) with the seconds elapsed. The global torch RNG is left as it was.
-    """
+    """Train VGAI in the three stages of the module docstring; save to ``checkpoint`` as it goes. ``stage1``
+    runs stage 1 (``fit_stage1``'s signature; ``lab.stage1_cache`` reads one trained before). Returns the
+    controller and its history: each stage's losses, the round checks (``imitation.round_check`` on
+    ``check_episodes``) and ``seconds_by_phase``. The global torch RNG is left as it was."""
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(tcfg.seed)  # the weights' initialisation
         gen = torch.Generator().manual_seed(tcfg.seed)  # every draw of the training
         model = tcfg.new_model()
         learner = VGAIController(model, cfg, tcfg.vision, tcfg.gso)
-        history = {"warm_loss": [], "mlp_loss": [], "joint_loss": [], "rounds": []}
+        seconds = {}  # where the minutes go (``timed``)
+        history = {"warm_loss": [], "mlp_loss": [], "joint_loss": [], "rounds": [], "seconds_by_phase": seconds}
         start = time.perf_counter()
 
         def save(finished: bool = False) -> None:
@@ -343,9 +352,9 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
 
         def check(stage: str) -> None:
             model.eval()
-            history["rounds"].append({"stage": stage, "episodes": store.episodes,
-                                      **round_check(learner, cfg, check_episodes, tcfg.seed),
-                                      "seconds": time.perf_counter() - start})
+            with timed(seconds, "round checks (flights of the learner)"):
+                result = round_check(learner, cfg, check_episodes, tcfg.seed)
+            history["rounds"].append({"stage": stage, "episodes": store.episodes, **result, "seconds": time.perf_counter() - start})
             log.info("%s: round-check relative cost %.2f after %.0f s", stage,
                      history["rounds"][-1]["check_relative_cost"], time.perf_counter() - start)
             save()
@@ -353,22 +362,26 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
         # Round 0: the expert flies alone; the warm starts (stages 1 and 2) learn from its flights,
         # or, as in the paper, joint K-step BPTT from random weights.
         store = EpisodeStore()
-        for flight, swarms in flight_groups(cfg, tcfg, tcfg.expert_episodes, gen):
-            store.fly(None, flight, *sample_initial_state(flight, swarms, gen), 0.0, gen)
+        with timed(seconds, "round 0: the expert's flights"):
+            for flight, swarms in flight_groups(cfg, tcfg, tcfg.expert_episodes, gen):
+                store.fly(None, flight, *sample_initial_state(flight, swarms, gen), 0.0, gen)
         opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
         if tcfg.warm_starts:
-            history.update(stage1(model.cnn, cfg, tcfg, store.groups(), gen, progress))
-            history["mlp_loss"] = fit_mlp(model, tcfg, store.groups(), gen, progress)
+            with timed(seconds, "stage 1: state estimation"):
+                history.update(stage1(model.cnn, cfg, tcfg, store.groups(), gen, progress))
+            with timed(seconds, "stage 2: the MLP on the CNN's features"):
+                history["mlp_loss"] = fit_mlp(model, tcfg, store.groups(), gen, progress)
             check("after stages 1-2")
         else:
             history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
-                                                 desc="stage 3: joint BPTT on the expert's flights")
+                                                 desc="stage 3: joint BPTT on the expert's flights", seconds=seconds)
             check("after joint training on the expert's flights")
 
         # Stage 3: each DAgger round adds the learner's own flights, then joint K-step BPTT on all.
         for rnd in range(tcfg.dagger_rounds):
-            dagger_round(learner, store, cfg, tcfg, gen)
-            history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,
+            with timed(seconds, "DAgger flights (rendering, CNN, physics)"):
+                dagger_round(learner, store, cfg, tcfg, gen)
+            history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress, seconds=seconds,
                                                  desc=f"stage 3: joint BPTT, round {rnd + 1}/{tcfg.dagger_rounds}")
             check(f"DAgger round {rnd + 1}")
         save(finished=True)

@@ -143,6 +143,7 @@ def main(argv=None) -> int:
            "train_config": tcfg.to_dict(),
            "train_seconds": round(hist["seconds"], 1), "stage1_cached": hist.get("stage1_cached"),
            "stage1_seconds": round(hist.get("stage1_seconds", 0.0), 1),
+           "seconds_by_phase": {k: round(v, 1) for k, v in hist.get("seconds_by_phase", {}).items()},
            "evaluation_seconds": round(eval_prov.seconds, 1), "round_checks": hist["rounds"], **res.summary(),
            "pinned": res.pinned(),
            "provenance": {"training": None if args.evaluate else train_prov.record(),
