@@ -237,7 +237,9 @@ def test_the_sentence_on_what_the_flock_needs_names_each_departure_by_its_record
     all_needed = findings.needs({"depth": apart, "warm starts": cut})
     assert "only with every departure" in all_needed and "depth" in all_needed and "warm starts" in all_needed
     some = findings.needs({"depth": flocks, "warm starts": apart})
-    assert some == "VGAI still flocks without depth; it does not flock without warm starts."
+    assert some == (f"VGAI still flocks without depth ({FLOCKED_VARIANCE / 2:.1e} m²/s²); it does not flock without "
+                    f"warm starts ({10 * FLOCKED_VARIANCE:.1e} m²/s²).")  # each label beside its variance
+    assert f"connected in {FLOCKED_CONNECTED / 2:.0%}" in all_needed  # and the share connected where that fails
     assert "still flocks without any one" in findings.needs({"depth": flocks})
     with pytest.raises(ValueError):
         findings.needs({})

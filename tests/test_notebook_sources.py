@@ -269,7 +269,8 @@ def test_every_controller_of_the_book_has_its_own_colour():
 
     named = {k: v for k, v in PALETTE.items() if k != "centralized"}
     assert len(set(named.values())) == len(named), "two controllers share a colour"
-    assert controller_color("VGAI, depth camera") == PALETTE["depth camera"] != PALETTE["VGAI"]
+    assert controller_color("VGAI, depth camera") == PALETTE["VGAI"]  # the book's VGAI sees through the camera
+    assert controller_color("VGAI on clean frames") == PALETTE["clean frames"] != PALETTE["VGAI"]
     assert controller_color("the paper's VGAI (one gray frame)") == PALETTE["paper's VGAI"]
 
 

@@ -20,7 +20,8 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.lab.reproduce import PAPER  # noqa: E402
-from vgai_lite.lab.runs import PAPER_SEEDS, chosen_camera_runs, how_trained, training_minutes  # noqa: E402
+from vgai_lite.lab.runs import (PAPER_SEEDS, TIMED_ALONE, TRAINING_TARGET_MINUTES, chosen_camera_runs,  # noqa: E402
+                                how_trained, training_minutes)
 from vgai_lite.vgai_config import VGAITrainConfig, book_recipe  # noqa: E402
 from vgai_lite.book import TEST_SEED  # noqa: E402
 
@@ -97,6 +98,8 @@ def section() -> str:
     results = _load("data/results/results.json")
     choice = _load("data/vgai/seeds/choice.json")
     seed_recs = {n: _load(f"data/vgai/seeds/{n}.json") for n in choice["candidates"]}
+    alone = _load(f"data/experiments/{TIMED_ALONE}.json")
+    alone_command = alone["command"].split(" --note")[0].replace(" --stage1-cache ", ' --stage1-cache ""')  # the note is long
     mean_seeds = sum(r["relative_cost_mean"] for r in seed_recs.values()) / len(seed_recs)
     seeds_note = (f"training seed {choice['chosen_seed']} of {len(seed_recs)}, chosen on validation episodes by the book's rule; "
                   f"mean of the {len(seed_recs)} seeds {mean_seeds:.2f}")
@@ -152,7 +155,13 @@ def section() -> str:
         "provenance: one thread at a load near 2 or above is a training that shared the two cores with another job): "
         + ", ".join(f"seed {choice['candidates'][n]['training_seed']} {vg_minutes(r):.0f}{_how(r)}" for n, r in seed_recs.items())
         + "; " + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.0f}{_how(r)}" for n, r in vgai.items() if n != "F24")
-        + " (`runs.training_minutes`: a run that reused a cached first stage adds that stage's recorded time).",
+        + " (`runs.training_minutes`: a run that reused a cached first stage adds that stage's recorded time). "
+        f"The recipe timed alone (training seed {alone['train_config']['seed']}, "
+        f"`{alone_command}`): "
+        f"{vg_minutes(alone):.0f} min{_how(alone)}, against a target of at most {TRAINING_TARGET_MINUTES} min; "
+        f"where they go, `seconds_by_phase` in data/experiments/{TIMED_ALONE}.json (notebook 06). That training costs "
+        f"{alone['relative_cost_mean']:.2f} on the validation episodes and {'flocks' if flocked(alone) else 'does not flock'} "
+        f"(variance at 5 s {alone['velocity_variance_median']['5s']:.1e} m²/s²).",
         "",
         _tables(results),
         "",
@@ -183,6 +192,17 @@ def _tables(results: dict) -> str:
             f"{prov['compute_seconds']['evaluation'] / 60:.0f} min as each cell recorded when it was computed "
             f"(the invocations that computed them, with their commands and threads, are listed in "
             f"`data/results/results.json`).")
+    timed_file = ROOT / "data" / "results" / "timed_run.json"
+    if timed_file.is_file():  # tools/experiments/reproduce_timed.py: every cell recomputed in one run
+        tr = json.loads(timed_file.read_text())
+        big = tr["largest_difference"]
+        text += (f" Recomputed as one run (`{tr['command']}`: every cell evaluated anew from the same checkpoints, "
+                 f"none read back, {tr['models_trained_now']} models trained): {tr['wall_seconds'] / 60:.0f} min at "
+                 f"{tr['provenance']['torch_threads']} threads, load average {tr['provenance']['load_average_mean']:.1f}; "
+                 + ("every cell's relative cost equals the committed one" if tr["cells_equal_committed"] else
+                    "NOT every cell's relative cost equals the committed one")
+                 + f" (the largest difference: {big['cell']}, {big['committed']} against {big['now']}). The trainings "
+                 f"those checkpoints record took {tr['training_recorded_seconds'] / 3600:.1f} h more.")
     ray_file = ROOT / "data" / "experiments" / "ray_quick.json"
     if ray_file.is_file():
         rq = json.loads(ray_file.read_text())

@@ -28,7 +28,7 @@ def adjacency(r: torch.Tensor, R: float) -> torch.Tensor:
 
 
 def gso(A: torch.Tensor, kind: str = DEFAULT_GSO) -> torch.Tensor:
-    """A graph shift operator built from the binary adjacency A, (B, N, N) -> (B, N, N).
+    """The graph shift operator S(t) of eq. 5, built from the binary adjacency A, (B, N, N) -> (B, N, N).
 
     kind (spectrum for an undirected graph; D = diag(degrees)):
       "adjacency"            S = A                     eigenvalues in [-d_max, d_max]

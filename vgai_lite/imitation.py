@@ -51,8 +51,8 @@ def dagger_mix(u_learner: torch.Tensor, u_expert: torch.Tensor, p: float,
 def fly_dagger(learner, cfg: FlockConfig, r0: torch.Tensor, v0: torch.Tensor, p_learner: float,
                generator: torch.Generator, record: Callable, steps: Optional[int] = None) -> None:
     """Fly the swarms (r0, v0) (B, N, 2) for ``steps`` steps (default cfg.T) under the DAgger mixture, calling
-    ``record(t, r, v, u_star, Z)`` at every step with the state, the expert's label and the
-    learner's Z(t) (None without a learner).
+    ``record(t, r, v, u_star, Z)`` at every step with the state, the expert's label U*(t) (eq. 9) and Z(t)
+    (None without a learner).
 
     ``learner`` (or None: the expert flies alone) observes every step, so that its buffers follow
     the trajectory actually flown, and acts where ``dagger_mix`` picks it (p_learner > 0)."""

@@ -22,11 +22,11 @@ from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
 
 PALETTE = {"expert": "black", "centralized": "black", "DAGNN": "tab:blue", "VGAI": "tab:orange",
            "Local": "tab:green", "pilot": "tab:purple", "paper's VGAI": "tab:brown",
-           "depth camera": "tab:red", "gray camera": "tab:pink"}
+           "clean frames": "0.45", "gray camera": "tab:pink"}
 """One colour per controller across the whole book (every figure takes it from here): the expert
-black, DAGNN blue, the book's VGAI orange, the local heuristic green, the modular vision pilot
-purple, the paper's VGAI (one gray frame, notebook 11) brown, and the VGAIs trained through a
-camera (notebook 08) red (gray + depth) and pink (gray only). ``controller_color`` finds a name's colour by the longest of these keys it contains."""
+black, DAGNN blue, the book's VGAI orange (through the camera, gray + depth), Local green, the modular
+vision pilot purple, the paper's VGAI brown, the recipe on clean frames gray, the gray-only camera VGAI pink.
+``controller_color`` finds a name's colour by the longest of these keys it contains."""
 
 
 def controller_color(name: str, default: Optional[str] = None) -> Optional[str]:

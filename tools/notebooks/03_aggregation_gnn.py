@@ -645,9 +645,10 @@ display(Markdown("| training | seed 0 | seed 1 | spread between the seeds |\n|--
 # episode intervals and the spread between the two seeds of each row; with two seeds that spread is
 # itself a rough estimate, so a small gap is "cannot tell", whichever way it points. DAgger earns its
 # keep when the learner's own mistakes lead it to states the expert's flights never visit; a linear
-# enough task, a learner that imitates well, or few rounds leave little for it to add, which is what
-# section 7 found for the shipped DAGNNs. More seeds, longer flights (where drift accumulates) or a
-# weaker learner would be the runs that could change the answer.
+# enough task, a learner that imitates well, or few rounds leave little for it to add. Compare your
+# verdict with section 7's for the shipped DAGNNs (its printed sentence, trained at the full budget on
+# more flights): where the two disagree, the small budget is the likelier reason. More seeds, longer
+# flights (where drift accumulates) or a weaker learner would be the runs that could change the answer.
 
 # %% [markdown]
 # ## Key takeaways

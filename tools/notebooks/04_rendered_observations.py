@@ -237,8 +237,8 @@ prose("In these {E} episodes the expert brings a pair closer than {d:g} m in {k}
       E=E, d=d, k=touching["Centralized"], c=with_contact["Centralized"],
       verdict=("They differ for some controller: pymunk resolves a contact inside a step, while the simulator "
                "reads distances at the sampling instants only." if not agree else
-               "The two agree for every controller: notebook 01's share is over more episodes, and its close "
-               "calls fall in episodes this table does not fly." if touching["Centralized"] == 0 else
+               "The two agree for every controller; none of notebook 01's close calls falls in these episodes."
+               if touching["Centralized"] == 0 else
                "The two agree for every controller: these are real contacts, which notebook 01 counts among "
                "its close calls."))
 

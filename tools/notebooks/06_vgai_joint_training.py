@@ -38,7 +38,7 @@ from vgai_lite.book import DATA_DIR, QUICK, TEST_SEED, pick, prose
 from vgai_lite.evaluate import FLOCKED_VARIANCE, as_safe_as_expert, flocked
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.lab.provenance import sha256
-from vgai_lite.lab.runs import VGAI_F24_SEED, training_minutes
+from vgai_lite.lab.runs import TIMED_ALONE, TRAINING_TARGET_MINUTES, VGAI_F24_SEED, how_trained, training_minutes
 from vgai_lite.vgai_config import BOOK, BOOK_RECIPE, book_recipe
 from vgai_lite.vgai_training import train_vgai
 from vgai_lite.viz import PALETTE
@@ -129,6 +129,25 @@ print(vgai)
 record = json.loads((DATA_DIR / "vgai" / "vgai_F24.json").read_text())
 print(f"trained in {training_minutes(record):.0f} min, stages 1 to 3 (stage 1: "
       f"{(record.get('stage1_seconds') or 0) / 60:.0f} min of them), by its record")
+
+# %% [markdown]
+# **Where a training's minutes go.** Every training records the seconds of each phase
+# (`seconds_by_phase` in its history). The one below is the same recipe from another seed,
+# trained alone on the two cores with nothing else running, so its minutes are the recipe's own.
+
+# %%
+alone = json.loads((DATA_DIR / "experiments" / f"{TIMED_ALONE}.json").read_text())
+phases, total = alone["seconds_by_phase"], alone["train_seconds"]
+display(Markdown(f"Training seed {alone['train_config']['seed']}, {how_trained(alone)}: "
+                 f"{total / 60:.0f} min in all (the target: at most {TRAINING_TARGET_MINUTES}).\n\n"
+                 "| phase | minutes | share |\n|---|---|---|\n"
+                 + "\n".join(f"| {k} | {v / 60:.1f} | {v / total:.0%} |" for k, v in phases.items())
+                 + f"\n| the rest (saving checkpoints, bookkeeping) | {(total - sum(phases.values())) / 60:.1f} | "
+                   f"{1 - sum(phases.values()) / total:.0%} |"
+                 + f"\n\nOn the validation episodes this training costs {alone['relative_cost_mean']:.2f} and "
+                   + ("flocks" if flocked(alone) else "does not flock")
+                   + f" (variance at 5 s {alone['velocity_variance_median']['5s']:.1e} m²/s²): a training's minutes do "
+                   "not say whether its swarm will settle (notebook 11, section 8, counts the recipe's seeds)."))
 
 # %%
 fig, axes = plt.subplots(1, 3, figsize=(15, 3.6))

@@ -496,7 +496,8 @@ n_l = [cell("N", "Local", c) for c in n_cols]
 bullets = [
     f"* **The paper's VGAI, flown as the paper describes it, does not align a swarm here**: "
     f"{', '.join(format(r['relative_cost_mean'], '.1f') for r in paper_test.values())} on these test episodes over "
-    f"its {len(paper_test)} training seeds, {sum(flocked(r) for r in paper_test.values())} of which flocked (one gray "
+    f"its {len(paper_test)} training seeds, {sum(flocked(r) for r in paper_test.values())} of which flocked (variance at 5 s "
+    f"{', '.join(format(r['velocity_variance_median']['5s'], '.1e') for r in paper_test.values())} m²/s²; one gray "
     "frame shows no motion; notebook 11). The VGAI row of these tables is the book's recipe, the paper's method with "
     "the departures notebook 11 leaves out one at a time, so it is not the paper's VGAI reproduced. "
     f"Its trends in F and K, from one training per cell: F = 6, 12, 24 give {series('F', 'VGAI')} ({steps('F', 'VGAI')}), K - 1 = 1, 2, 3 give "
@@ -645,8 +646,10 @@ display(prose("The expert itself does not flock at N' = 200: sampled at Ts it mu
       r50=srt["N=50"]["velocity_variance_median"]["5s"], r200=srt["N=200"]["velocity_variance_median"]["5s"],
       rc200=srt["N=200"]["share_connected_at_end"],
       best="Flocked at N' = 200: {}. Flocked at both N = 50 and N' = 100: {}.".format(
-          "; ".join(f"*{l}*" for l, c in team_recs.items() if flocked(c["N=200"])) or "none",
-          "; ".join(f"*{l}*" for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none")))
+          "; ".join(f"*{l}* ({c['N=200']['velocity_variance_median']['5s']:.1e} m²/s²)" for l, c in team_recs.items()
+                    if flocked(c["N=200"])) or "none",
+          "; ".join(f"*{l}* ({c['N=50']['velocity_variance_median']['5s']:.1e} and {c['N=100']['velocity_variance_median']['5s']:.1e})"
+                    for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none")))
 k6, pnt = team_recs["K − 1 = 5 exchanges, R in [1, 2] m"], team_recs["features per neighbour (N = 50, R = 1.5 m; notebook 03)"]
 prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 5 and R drawn in training it is connected "
       "at 5 s in {k6c:.0%} of episodes. What changes the picture is the features' scale: divided by each drone's "

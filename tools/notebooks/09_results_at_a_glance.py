@@ -25,7 +25,8 @@ from vgai_lite.lab.paper import PAPER
 from vgai_lite.lab.reproduce import load_results
 from vgai_lite.lab.findings import compare, needs, noise_that_breaks
 from vgai_lite.lab.runs import (CAMERA_SEED_RUNS, CLEAN_SEED_RUNS, LEAVE_ONE_OUT, DAGNN_RUNS, PAPER_SEEDS, VGAI_RUNS,
-                                 chosen_camera_runs, how_trained, training_minutes)
+                                 chosen_camera_runs, how_trained, training_minutes,
+                                 TIMED_ALONE, TRAINING_TARGET_MINUTES)
 from vgai_lite.vgai_config import PAPER as PAPER_T
 
 
@@ -65,7 +66,7 @@ ROWS = [("Centralized expert", "everyone's positions and velocities", None, 1.0,
          f"{(vgai_t.K - 1) * vgai_t.F * 4}", "—"),
         ("Modular vision pilot (a state estimator trained alone, feeding the DAGNN's MLP)",
          "its own images, neighbours' messages", "pilot", None, f"{(dagnn_t.K - 1) * 6 * 4}", "—"),
-        ("VGAI trained through the camera, gray only: the paper's sensor (notebook 08's choice)",
+        ("VGAI trained through the camera, gray only: the paper's cameras, without depth (two frames, as the book's recipe; notebook 08's choice)",
          "its own gray frames, neighbours' messages", gray_name, PAPER["R"]["VGAI"][1.5],
          f"{(vgai_t.K - 1) * vgai_t.F * 4}",
          minutes(load(f"experiments/{gray_name}.json"))),
@@ -98,9 +99,11 @@ paper_costs = [test[f"vgai_paper_seed{s}"]["relative_cost_mean"] for s in PAPER_
 display(prose("On these episodes the DAGNN is {dv} VGAI and VGAI is {vl} the local heuristic (the paper: DAGNN < VGAI < Local), "
       "at lower costs than the paper's: VGAI {vc:.2f} against the paper's {vp:.2f}, the DAGNN {dc:.2f} against {dp:.2f}. "
       "{flock} The paper's VGAI as the paper describes it, trained at the book's budget, costs {plo:.2f} to {phi:.2f} "
-      "over three training seeds and flocks in {pfl} of them (notebook 11 sets it beside a swarm that does nothing), so "
+      "over three training seeds and flocks in {pfl} of them (variance at 5 s {pv} m²/s²; notebook 11 sets it beside a "
+      "swarm that does nothing), so "
       "the book's VGAI is the paper's method with the book's departures, not the paper's VGAI reproduced.",
       pfl=sum(flocked(test[f"vgai_paper_seed{s}"]) for s in PAPER_SEEDS),
+      pv=", ".join(f"{test[f'vgai_paper_seed{s}']['velocity_variance_median']['5s']:.1e}" for s in PAPER_SEEDS),
       dv=order[compare(d, v)], vl=order[compare(v, l)],
       vc=v["relative_cost_mean"], vp=PAPER["R"]["VGAI"][1.5], dc=d["relative_cost_mean"], dp=PAPER["R"]["DAGNN"][1.5],
       plo=min(paper_costs), phi=max(paper_costs),
@@ -190,7 +193,8 @@ prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than
 gray, seed0 = load("experiments/vgai_learner_gray.json"), load(f"experiments/{CLEAN_SEED_RUNS[0]}.json")
 gray_cam, depth_cam = load(f"experiments/{gray_name}.json"), load(f"experiments/{CAMERA_SEED_RUNS[0]}.json")
 yn = lambda rec: "yes" if flocked(rec) else "no"
-display(prose("The depth channel, measured ({ep} validation episodes, training seed 0): trained on clean frames, with gray "
+assert len({r["episodes"] for r in (gray, seed0, gray_cam, depth_cam)}) == 1, "the four records fly as many episodes"
+display(prose("The depth channel, measured ({ep} validation episodes each, training seed 0): trained on clean frames, with gray "
       "and depth the recipe costs {dc:.2f} and ends at {d5:.1e} m²/s² at 5 s (flocked: {df}), with the gray channel only "
       "{gc:.2f} and {g5:.1e} (flocked: {gf}); trained through the camera, with gray and depth {dcc:.2f} and {dc5:.1e} "
       "(flocked: {dcf}), with gray only {gcc:.2f} and {gc5:.1e} (flocked: {gcf}).", ep=depth_cam["episodes"], d5=seed0["velocity_variance_median"]["5s"], df=yn(seed0),
@@ -215,6 +219,7 @@ display(prose("What VGAI's flocking needs, by notebook 11's leave-one-out (the b
 # %%
 choice = load("vgai/seeds/choice.json")
 seed_minutes = [training_minutes(load(f"vgai/seeds/{n}.json")) for n in choice["candidates"]]
+alone = load(f"experiments/{TIMED_ALONE}.json")
 n_cols = results["tables"]["N"]["columns"]
 n_vgai = {c: results["tables"]["N"]["rows"]["VGAI"][str(c)] for c in n_cols}
 apart = [c for c in n_cols if not flocked(n_vgai[c])]
@@ -228,7 +233,6 @@ noisy = robustness.find(rob, "VGAI", (("image_noise", robustness.TARGETS["image_
 cams = {sensor: load(f"experiments/{name}_cameras.json")["settings"] for sensor, name in chosen_camera_runs().items()}
 authors = f"noise{10 / 255:.4g}"
 cams_seed1 = load(f"experiments/{chosen_camera_runs()['gray only']}_seed1_cameras.json")["settings"]
-cam_flocked = sum(flocked(c[k]) for c in cams.values() for k in ("clean", authors))
 clean_cams = load(f"experiments/{CLEAN_SEED_RUNS[0]}_cameras.json")["settings"]
 clean_breaks = noise_that_breaks(clean_cams)
 expert_200 = load("experiments/expert_stability.json")["teams"]["200"]
@@ -267,13 +271,24 @@ items = [
     f"{cams['gray only']['clean']['relative_cost_mean']:.2f} and {cams['gray only'][authors]['relative_cost_mean']:.2f} "
     f"({cams['gray only']['clean']['episodes']} validation episodes; variance at 5 s " + ", ".join(
         f"{c[k]['velocity_variance_median']['5s']:.1e}" for c in cams.values() for k in ("clean", authors))
-    + f" m²/s² in that order, so flocked in {cam_flocked} of these four). "
+    + " m²/s² in that order). "
     + ("At 10/255 the noise costs each of them at most a quarter of its clean cost"
        if all(c[authors]["relative_cost_mean"] <= 1.25 * c["clean"]["relative_cost_mean"] for c in cams.values())
        else "The noise still costs them more than a quarter of their clean cost")
-    + ("." if cam_flocked == 4 else "; flocking through a camera's noise is still open."),
-    f"* **Training time.** The book's recipe took {min(seed_minutes):.0f} to {max(seed_minutes):.0f} minutes per "
-    "training seed (" + "; ".join(sorted({how_trained(load(f"vgai/seeds/{n}.json")) for n in choice["candidates"]}))
+    + (". With depth, then, the camera's noise is no longer what stops the flock" if all(
+        flocked(cams["gray + depth"][k]) for k in ("clean", authors)) else "; with depth, flocking through the camera's noise is still open")
+    + ("; without depth it is the sensor, not the noise: the gray-only VGAI does not flock on clean frames either."
+       if not flocked(cams["gray only"]["clean"]) else "."),
+    f"* **Training time.** Timed on the two cores (training seed {alone['train_config']['seed']}, "
+    f"{how_trained(alone)}), the book's recipe takes {training_minutes(alone):.0f} minutes, "
+    + (f"{TRAINING_TARGET_MINUTES - training_minutes(alone):.0f} under" if training_minutes(alone) <= TRAINING_TARGET_MINUTES
+       else f"{training_minutes(alone) - TRAINING_TARGET_MINUTES:.0f} over")
+    + f" the {TRAINING_TARGET_MINUTES} minutes a training may take (notebook 06 says where they go); that training "
+    f"{does(alone)} flock on the validation episodes (variance at 5 s {alone['velocity_variance_median']['5s']:.1e} m²/s²), "
+    f"and over its {len(CAMERA_SEED_RUNS)} training seeds the recipe flocks in "
+    f"{sum(flocked(load(f'experiments/{n}.json')) for n in CAMERA_SEED_RUNS)} (notebook 11). "
+    f"The seeds the book chose from took {min(seed_minutes):.0f} to {max(seed_minutes):.0f} minutes each ("
+    + "; ".join(sorted({how_trained(load(f"vgai/seeds/{n}.json")) for n in choice["candidates"]}))
     + ")"
     + ("; the two VGAIs of Table 2b's extra row, trained at two threads by `reproduce --extras --threads 2`, took "
        + " and ".join(f"{load(f'results/cells/{key}.json')['train_seconds_recorded'] / 60:.0f}"

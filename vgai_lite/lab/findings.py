@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
-from ..evaluate import flocked
+from ..evaluate import FLOCKED_CONNECTED, flocked
 
 HOLDS, CONTRADICTED, CANNOT_TELL = "yes", "no", "cannot tell"
 
@@ -92,14 +92,21 @@ def series_text(cells: Sequence[dict], labels: Sequence) -> str:
 def needs(without: dict) -> str:
     """The book's one sentence on what makes VGAI flock, from the leave-one-out records
     (``runs.LEAVE_ONE_OUT``: departure -> the record of the recipe without it): which departures the
-    flock needs (without each, it does not flock by ``evaluate.flocked``) and which it does not."""
+    flock needs (without each, it does not flock by ``evaluate.flocked``) and which it does not, each
+    with its velocity variance at 5 s (and its share connected at 5 s where that is what fails)."""
     if not without:
         raise ValueError("needs() takes at least one leave-one-out record")
     def listed(xs):
         return xs[0] if len(xs) == 1 else ", ".join(xs[:-1]) + " or " + xs[-1]
 
-    needed = [d for d, rec in without.items() if not flocked(rec)]
-    spare = [d for d, rec in without.items() if flocked(rec)]
+    def shown(d):
+        rec = without[d]
+        cut = rec["share_connected_at_end"] < FLOCKED_CONNECTED
+        return (f"{d} ({rec['velocity_variance_median']['5s']:.1e} m²/s²"
+                + (f", connected in {rec['share_connected_at_end']:.0%}" if cut else "") + ")")
+
+    needed = [shown(d) for d, rec in without.items() if not flocked(rec)]
+    spare = [shown(d) for d, rec in without.items() if flocked(rec)]
     if not spare:
         return (f"VGAI flocks only with every departure from the paper that the book left out in turn: without "
                 f"any one of them ({listed(needed)}) it does not flock.")

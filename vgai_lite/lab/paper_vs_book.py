@@ -59,9 +59,9 @@ def _rows() -> dict:
             f"with the state-estimation loss kept (weight {tv.aux_weight:g}), half of each round's swarms flown by "
             f"the learner alone; every stage sees its frames through a camera model (noise up to σ = "
             f"{tv.camera.noise[1]:g}, blur up to {tv.camera.blur_deg[1]:g}°, exposure, a dead camera; notebook 08)",
-            "the book's additions: notebook 11's leave-one-out says which of them the flock needs; "
-            "the paper's VGAI fails for its sensor (one gray frame), not for want of warm starts (notebook "
-            "11's square); notebooks 05, 06 and 11"),
+            "the book's additions: notebook 11's leave-one-out says which of them the book's recipe needs to "
+            "flock; the paper's VGAI fails first for its sensor (one gray frame: warm starts alone do not rescue it, "
+            "notebook 11's square); notebooks 05, 06 and 11"),
         "GSO": (
             "S(t) respects the graph's sparsity (adjacency, Laplacian or normalisations cited); which one "
             "is not said (the public reference code averages)",

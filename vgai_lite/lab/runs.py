@@ -71,15 +71,23 @@ its warm starts (``BOOK_SENSOR``; "the paper's recipe" of notebook 11's first ab
 paper's VGAI itself was flown): their records (and vgai_F24_plain's checkpoint) are kept in
 data/experiments/, for notebook 11's table and notebook 07's two trainings of one configuration."""
 
-CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthcam_seed2")
-"""The book's recipe from training seeds 0, 1 and 2 as trained (data/experiments/NAME.json, copied to
-data/vgai/seeds/vgai_F24_seedS when the camera became the book's): their camera evaluations on the
-validation episodes, NAME_cameras.json (notebook 08)."""
+TIMED_ALONE = "vgai_depthcam_seed3"
+"""The book's recipe (``BOOK``, training seed 3) trained alone on the two cores at two threads, nothing else
+running (data/experiments/NAME.json): the recipe's training time, and where it goes (``seconds_by_phase``)."""
+
+CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthcam_seed2", TIMED_ALONE)
+"""Every training of the book's recipe through the camera, training seeds 0 to 3 (data/experiments/NAME.json;
+seeds 0-2 copied to data/vgai/seeds/vgai_F24_seedS when the camera became the book's, the pool its
+vgai_F24 was chosen from; seed 3 trained later, alone, to time the recipe): the recipe's record over
+seeds, its camera evaluations on the validation episodes, NAME_cameras.json (notebook 08)."""
 
 CLEAN_SEED_RUNS: tuple = ("vgai_clean_seed0", "vgai_clean_seed1", "vgai_clean_seed2")
 """The book's recipe on clean frames (``BOOK_RECIPE`` without ``BOOK_CAMERA``; the book's VGAI until the
 camera), training seeds 0, 1 and 2: data/experiments/NAME.pt and .json (validation episodes). What the
 camera costs on clean frames, and the leave-one-out's row without the camera."""
+
+TRAINING_TARGET_MINUTES = 45
+"""The most a training of the book may take alone on the two cores (the camera issue's target)."""
 
 DEPARTURES: dict[str, frozenset] = {
     "the learner flying alone": frozenset({"learner_swarms"}),
@@ -119,7 +127,7 @@ LEAVE_ONE_OUT: dict[str, tuple[str, str]] = {d: (name, LEFT_WITHOUT[d]) for d, n
 }.items()}
 """The book's recipe (``BOOK``, through the camera: CAMERA_SEED_RUNS) without one of its departures from the
 paper at a time (training seed 0, the same 20 validation episodes, flown on clean frames): departure ->
-(data/experiments/NAME.json, what is left). The yardstick is the recipe over its three training seeds.
+(data/experiments/NAME.json, what is left). The yardstick is the recipe over its training seeds (CAMERA_SEED_RUNS).
 Notebook 11's leave-one-out table and the book's one sentence on what VGAI's flocking needs
 (``findings.needs``). The team and radius randomisation is not a row: it is not part of the recipe
 (notebook 07: trained over teams and radii, VGAI transferred worse)."""
