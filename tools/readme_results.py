@@ -196,13 +196,15 @@ def _tables(results: dict) -> str:
     if timed_file.is_file():  # tools/experiments/reproduce_timed.py: every cell recomputed in one run
         tr = json.loads(timed_file.read_text())
         big = tr["largest_difference"]
-        text += (f" Recomputed as one run (`{tr['command']}`: every cell evaluated anew from the same checkpoints, "
-                 f"none read back, {tr['models_trained_now']} models trained): {tr['wall_seconds'] / 60:.0f} min at "
-                 f"{tr['provenance']['torch_threads']} threads, load average {tr['provenance']['load_average_mean']:.1f}; "
-                 + ("every cell's relative cost equals the committed one" if tr["cells_equal_committed"] else
-                    "NOT every cell's relative cost equals the committed one")
-                 + f" (the largest difference: {big['cell']}, {big['committed']} against {big['now']}). The trainings "
-                 f"those checkpoints record took {tr['training_recorded_seconds'] / 3600:.1f} h more.")
+        text += (f" Recomputed as one run, alone (`{tr['command']}`: all {tr['cells']} cells evaluated anew in a fresh "
+                 f"folder from the same checkpoints, {tr['models_trained_now']} models trained): "
+                 f"{tr['wall_seconds'] / 60:.0f} min at {tr['provenance']['torch_threads']} threads, load average "
+                 f"{tr['provenance']['load_average_mean']:.1f}; "
+                 + ("every cell's relative cost equals the committed one to 1e-3" if tr["cells_equal_committed"] else
+                    "not every cell's relative cost equals the committed one to 1e-3")
+                 + f" (the largest difference: {big['cell']}, {big['committed']} against {big['now']}, "
+                 f"{abs(big['now'] - big['committed']) / big['committed']:.2%}). The trainings those checkpoints record "
+                 f"took {tr['training_recorded_seconds'] / 3600:.1f} h more.")
     ray_file = ROOT / "data" / "experiments" / "ray_quick.json"
     if ray_file.is_file():
         rq = json.loads(ray_file.read_text())

@@ -61,16 +61,18 @@ def main(argv=None) -> int:
     diff = {k: abs(ours[k] - theirs[k]) for k in ours}
     worst = max(diff, key=diff.get)
     compute = fresh["provenance"]["compute_seconds"]
+    computed = len(list((work / "cells").glob("*.json")))  # the folder started empty: every cell file is this run's
     record = {"command": command, "reproduce_config": fresh["provenance"]["reproduce_config"],
               "wall_seconds": fresh["provenance"]["wall_seconds"], "cells": compute["cells"],
-              "cells_computed_now": compute["cells_computed_now"],
+              "cells_computed_now": compute["cells_computed_now"],  # reproduce's count: a cell two jobs share counts once read back
+              "cells_computed_in_this_run": computed,
               "models_trained_now": fresh["provenance"]["invocations"][-1]["models_trained_now"],
               "training_recorded_seconds": compute["training_recorded"],
               "cells_equal_committed": all(d <= 1e-3 for d in diff.values()),
               "largest_difference": {"cell": worst, "committed": theirs[worst], "now": ours[worst]},
               "provenance": prov.record(seed=rc.seed)}
     Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
-    print(f"{record['cells']} cells ({record['cells_computed_now']} computed now, {record['models_trained_now']} models "
+    print(f"{record['cells']} cells ({record['cells_computed_in_this_run']} computed in this run, {record['models_trained_now']} models "
           f"trained) in {record['wall_seconds'] / 60:.1f} min at {args.threads} threads, load average "
           f"{record['provenance']['load_average_mean']}; every cell equals the committed one: "
           f"{record['cells_equal_committed']} (largest difference {worst}: {theirs[worst]} -> {ours[worst]})")

@@ -171,7 +171,7 @@ plt.show()
 # %% [markdown]
 # The warm-started CNN and MLP alone fly badly (their errors compound in closed loop); the rounds of
 # joint K-step BPTT with the learner in the loop bring the cost down, unevenly, so where training
-# stops matters (notebook 11, section 8, trains three seeds and compares them).
+# stops matters (notebook 11, section 8, compares the recipe's training seeds).
 # Each joint step runs 4 windows × 4 steps × 50 agents = 800 images forward and backward, through
 # the trunk twice for the odd motion features (`python -m vgai_lite benchmark --vgai` times it).
 #

@@ -56,12 +56,18 @@ prov = results["provenance"]
 cs = prov["compute_seconds"]
 print(f"{cs['cells']} cells (data/results/results.json; its provenance says how and when each was computed)")
 print("settings:", prov["reproduce_config"])
+timed = json.loads((DATA_DIR / "results" / "timed_run.json").read_text())  # tools/experiments/reproduce_timed.py
+big = timed["largest_difference"]
+print(f"recomputed as one run alone: all {timed['cells']} cells in {timed['wall_seconds'] / 60:.0f} min at "
+      f"{timed['provenance']['torch_threads']} threads, {timed['models_trained_now']} models trained; largest difference "
+      f"from the committed cells: {big['cell']}, {big['committed']} -> {big['now']}")
 assert prov["reproduce_config"]["seed"] == TEST_SEED, "the tables are reported on the test episodes only"
 
 # %% [markdown]
 # ## How the experiments are set up, and where the paper is silent
 #
-# * **Time.** A run that finds the book's shipped checkpoints only evaluates; `reproduce --retrain`
+# * **Time.** A run that finds the book's shipped checkpoints only evaluates (one such run, every cell
+#   computed anew, is timed above: `tools/experiments/reproduce_timed.py`); `reproduce --retrain`
 #   trains every model the tables need anew (the VGAIs with K - 1 = 1, 2, 3 share their first stage).
 # * **Same episodes for everyone.** Every cell of a column is flown from the same initial
 #   conditions, by default the test episodes (the settings above name this run's seed); a cell's

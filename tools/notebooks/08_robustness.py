@@ -471,7 +471,7 @@ display(prose("On the test episodes the gray-only VGAI costs {c:.2f} on clean fr
 # %% [markdown]
 # **The book's recipe from four training seeds.** One training says little about a recipe: the depth
 # camera's recipe (the narrower ranges, gray + depth: the book's) trained from seeds 0, 1 and 2
-# (`vgai_variant.py --seed S`, the book's `data/vgai/seeds/`) and from seed 3 (trained later, alone on
+# (`vgai_variant.py --seed S`, the book's `data/vgai/seeds/`) and from seed 3 (trained alone on
 # the two cores, to time the recipe: notebook 06), each judged on clean frames of the same
 # validation episodes, beside the same recipe trained on clean frames from its own three seeds
 # (notebook 11). Two recipes differ only when their intervals over seeds, mean ± 1.96 × spread /
@@ -511,8 +511,8 @@ display(Markdown("| training | training seed | relative cost (95% CI) | variance
                    f"{next(iter(cam_seeds.values()))['seed']}), clean frames."))
 prose("Over its {n} seeds the book's recipe through the camera costs {dm:.2f} ± {ds:.2f} (mean ± spread between "
       "seeds) and flocks in {nf} of {n}; the same recipe on clean frames, over its own {nc} seeds, {cm:.2f} ± {cs:.2f}, "
-      "flocking in {cf} of {nc}. By the book's rule the camera's recipe {verdict} the clean one on clean frames: that is "
-      "what the camera costs where it is not needed.",
+      "flocking in {cf} of {nc}. By the book's rule the camera's recipe {verdict} the clean one on clean frames, in cost; "
+      "in flocks, {nf} of {n} against {cf} of {nc}.",
       dm=depth_row["relative_cost_mean"], ds=depth_row["seed_std"], nf=sum(flocked(r) for r in cam_seeds.values()),
       n=len(cam_seeds), cm=clean_row["relative_cost_mean"], cs=clean_row["seed_std"],
       cf=sum(flocked(r) for r in clean_seeds.values()), nc=len(clean_seeds),

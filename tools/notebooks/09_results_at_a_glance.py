@@ -294,7 +294,7 @@ items = [
        + " and ".join(f"{load(f'results/cells/{key}.json')['train_seconds_recorded'] / 60:.0f}"
                       for key in (results["tables"]["R"]["rows"]["VGAI (retrained)"][c]["cells"][0] for c in ("1.0", "2.0")))
        + " minutes" if results["tables"]["R"]["rows"].get("VGAI (retrained)") else
-       "; the VGAIs of Table 2b's extra row (retrained at R = 1.0 and 2.0 m) are not trained with this recipe yet "
+       "; the VGAIs of Table 2b's extra row (retrained at R = 1.0 and 2.0 m) are not trained with this recipe "
        "(`reproduce --extras` trains them)")
     + ". So each table cell is one training; the spread over training seeds of every VGAI cell is not measured.",
     "* **The paper's simulator.** AirSim's dynamics and cameras are not reproduced; the findings, not the numbers, "
