@@ -34,8 +34,11 @@ def test_every_column_flies_its_controllers_in_one_configuration():
     # every model is trained on N = 50 (Table 3 transfers), and the default rows at the defaults
     for table, row, column, spec, flight, episodes in jobs:
         assert spec.cfg.N == 50
-        if row in ("DAGNN", "VGAI"):
+        if row in ("DAGNN", "DAGNN (per neighbour)", "VGAI"):
             assert spec.cfg == FlockConfig()
+        # the per-neighbour row is the paper's DAGNN with each feature divided by the degree, nothing else
+        if spec.kind == "dagnn":
+            assert (spec.tcfg.feature_transform == "per_neighbour") == (row == "DAGNN (per neighbour)")
 
 
 def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
@@ -48,6 +51,11 @@ def test_shipped_checkpoints_are_reused_only_for_the_same_configuration():
     dagnn = models_of(rc, "K", "DAGNN", 2)
     assert [_shipped_path(s) for s in dagnn] == [DATA_DIR / "dagnn" / "dagnn_K3.pt", None, None]
     assert all(_shipped_path(s) is None for s in models_of(rc, "R", "DAGNN (retrained)", 1.0))
+    # one DAGNN per neighbour flies every column of Tables 2b and 3: the shipped one (training seed 0)
+    for table in ("R", "N"):
+        for column in TABLES[table]["columns"]:
+            assert [_shipped_path(s) for s in models_of(rc, table, "DAGNN (per neighbour)", column)] == \
+                [DATA_DIR / "dagnn" / "dagnn_K4_per_neighbour.pt", None, None]
     for name in ("vgai_F6", "vgai_F12", "vgai_K2", "vgai_K3"):
         assert _shipped_path(ModelSpec("vgai", FlockConfig(), VGAI_RUNS[name])) == DATA_DIR / "vgai" / f"{name}.pt"
     # the tables fly the VGAIs the book ships at F = 6, 12 and K - 1 = 1, 2 (runs.VGAI_RUNS), whatever their recipe

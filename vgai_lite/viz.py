@@ -22,10 +22,10 @@ from .render import CAMERAS, RenderConfig, render_egocentric, render_topdown
 
 PALETTE = {"expert": "black", "centralized": "black", "DAGNN": "tab:blue", "VGAI": "tab:orange",
            "Local": "tab:green", "pilot": "tab:purple", "paper's VGAI": "tab:brown",
-           "clean frames": "0.45", "gray camera": "tab:pink"}
+           "clean frames": "0.45", "gray camera": "tab:pink", "DAGNN (per neighbour)": "tab:cyan"}
 """One colour per controller across the whole book (every figure takes it from here): the expert
-black, DAGNN blue, the book's VGAI orange (through the camera, gray + depth), Local green, the modular
-vision pilot purple, the paper's VGAI brown, the recipe on clean frames gray, the gray-only camera VGAI pink.
+black, DAGNN blue (per neighbour: cyan), the book's VGAI orange (through the camera, gray + depth), Local green,
+the pilot purple, the paper's VGAI brown, the recipe on clean frames gray, the gray-only camera VGAI pink.
 ``controller_color`` finds a name's colour by the longest of these keys it contains."""
 
 

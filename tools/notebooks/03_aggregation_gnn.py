@@ -475,21 +475,33 @@ prose("What a drone can know is not what holds the sums back at R = 1 m: an orac
       oe=oracle["expert"]["share_connected_at_end"])
 
 # %% [markdown]
-# Chosen on those validation episodes, training seed 0 is flown once on the test episodes (reporting
-# only; `teams_and_radii.py --evaluate data/experiments/dagnn_per_neighbour.pt --test --episodes 50`):
+# Chosen on those validation episodes, the features per neighbour are what the book ships for every team
+# and radius: `dagnn_K4_per_neighbour` (`data/dagnn/`, `runs.DAGNN_RUNS`, training seed 0; seeds 1 and 2
+# are trained by `python -m vgai_lite reproduce`). Notebook 07's Tables 2b and 3 fly it on the test episodes
+# (reporting only) in the row *DAGNN (per neighbour)*, beside the paper's DAGNN (`dagnn_K4`, eq. 4's sums),
+# which stays the book's DAGNN everywhere else: it is the paper's baseline. The two rows, from the tables:
 
 # %%
 from vgai_lite.evaluate import as_safe_as_expert
+from vgai_lite.lab.paper import TABLES
 
-pt = json.loads((DATA_DIR / "experiments" / "dagnn_per_neighbour_teams_test.json").read_text())["cells"]
-display(Markdown("| DAGNN per neighbour, seed 0 | " + " | ".join(c.replace("N=", "N' = ").replace("R=", "R = ") for c in pt)
-                 + " |\n|---|" + "---|" * len(pt) + "\n| test episodes | " + " | ".join(
-                     f"{x['relative_cost_mean']:.2f} ({x['relative_cost_mean_ci95'][0]:.2f}-{x['relative_cost_mean_ci95'][1]:.2f})"
-                     f" · {variance_text(x['velocity_variance_median']['5s'])} · {x['share_connected_at_end']:.0%}"
-                     + (" · flocked" if flocked(x) else "") + ("" if as_safe_as_expert(x) else " · **less safe than the expert**")
-                     for x in pt.values()) + " |\n\n"
-                 + f"Each cell: relative cost (95% CI) · variance at 5 s [m²/s²] · connected at 5 s; "
-                   f"{next(iter(pt.values()))['episodes']} test episodes per cell."))
+tables = json.loads((DATA_DIR / "results" / "results.json").read_text())["tables"]
+cols = [("N", c) for c in TABLES["N"]["columns"]] + [("R", c) for c in TABLES["R"]["columns"] if c != 1.5]
+
+
+def test_cell(x):
+    lo, hi = findings.interval(x)
+    return (f"{x['relative_cost_mean']:.2f} ({lo:.2f}-{hi:.2f}) · {variance_text(x['velocity_variance_median']['5s'])} · "
+            f"{x['share_connected_at_end']:.0%}" + (" · flocked" if flocked(x) else "")
+            + ("" if as_safe_as_expert(x) else " · **less safe than the expert**"))
+
+
+display(Markdown("| test episodes (notebook 07) | " + " | ".join(f"{'N′' if t == 'N' else 'R'} = {c:g}" for t, c in cols)
+                 + " |\n|---|" + "---|" * len(cols) + "\n" + "\n".join(
+                     f"| {row} | " + " | ".join(test_cell(tables[t]["rows"][row][str(c)]) for t, c in cols) + " |"
+                     for row in ("DAGNN", "DAGNN (per neighbour)"))
+                 + "\n\nEach cell: relative cost (95 % interval over the three training seeds) · variance at 5 s [m²/s²] · "
+                   "connected at 5 s; R = 1.5 m is the column N′ = 50."))
 
 # %% [markdown]
 # ## 10. What the cost measures, and what it does not

@@ -27,7 +27,8 @@ TABLES: dict[str, dict] = {
     "v_init": {"title": "Table 2a: initial velocity v_init [m/s]", "column": "v_init", "columns": [1.0, 2.0, 3.0],
                "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"]},
     "R": {"title": "Table 2b: communication radius R [m]", "column": "R", "columns": [1.0, 1.5, 2.0],
-          "rows": ["DAGNN", "DAGNN (retrained)", "Local", "VGAI"], "extra_rows": ["VGAI (retrained)"]},
+          "rows": ["DAGNN", "DAGNN (retrained)", "DAGNN (per neighbour)", "Local", "VGAI"],
+          "extra_rows": ["VGAI (retrained)"]},
     "N": {"title": "Table 3: trained on N = 50, flown by N' agents", "column": "N'",
-          "columns": [50, 60, 75, 100, 200], "rows": ["DAGNN", "Local", "VGAI"]},
+          "columns": [50, 60, 75, 100, 200], "rows": ["DAGNN", "DAGNN (per neighbour)", "Local", "VGAI"]},
 }

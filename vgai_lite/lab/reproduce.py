@@ -13,6 +13,9 @@ about "robustness to different initial conditions"). Our choice: the rows DAGNN 
 controllers trained at the defaults (v_init = 3, R = 1.5), flown in each condition; the row
 "DAGNN (retrained)" is a DAGNN trained in that condition, which is cheap, to show what retraining buys;
 with ``--extras``, the row "VGAI (retrained)" of Table 2b does the same for VGAI (two more trainings).
+The row "DAGNN (per neighbour)" of Tables 2b and 3 (not the paper's) is one DAGNN trained at the defaults
+with each feature divided by the drone's degree (``runs.PER_NEIGHBOUR``, notebook 03 section 9), flown in
+every column: the controller for every team and radius.
 
 Every cell of a column is evaluated on the same initial conditions, the book's test episodes (seed
 ``book.TEST_SEED``: nothing is chosen on them), so controllers are compared episode by episode. A cell is one
@@ -46,7 +49,7 @@ from ..config import FlockConfig
 from ..dagnn_training import DAGNNTrainConfig
 from .paper import PAPER, TABLES
 from .provenance import git_state
-from .runs import VGAI_RUNS, training_minutes
+from .runs import PER_NEIGHBOUR, VGAI_RUNS, training_minutes
 from .ray_runner import run_jobs
 from .table_cells import ModelSpec, evaluate_cell, model_path
 from ..vgai_config import VGAITrainConfig, book_recipe
@@ -112,10 +115,11 @@ def _name(stem: str, seed: int, cfg_changes: dict) -> str:
     return stem + "".join(f"_{k}{v:g}" for k, v in cfg_changes.items()) + f"_s{seed}"
 
 
-def _dagnn(rc, K=4, seed=0, **cfg_changes) -> ModelSpec:
-    t = dataclasses.replace(DAGNNTrainConfig(K=K), seed=seed)
+def _dagnn(rc, K=4, seed=0, feature_transform="none", **cfg_changes) -> ModelSpec:
+    t = dataclasses.replace(DAGNNTrainConfig(K=K, feature_transform=feature_transform), seed=seed)
+    stem = f"dagnn_K{K}" + ("" if feature_transform == "none" else f"_{feature_transform}")
     return ModelSpec("dagnn", _base_cfg(rc, **cfg_changes), _quick_dagnn(t) if rc.quick else t,
-                     _name(f"dagnn_K{K}", seed, cfg_changes))
+                     _name(stem, seed, cfg_changes))
 
 
 def _book_vgai(F: int, K: int, seed: int) -> VGAITrainConfig:
@@ -152,6 +156,8 @@ def models_of(rc: ReproduceConfig, table: str, row: str, column) -> list[ModelSp
     if row == "DAGNN":
         K = int(column) + 1 if table == "K" else 4
         return [_dagnn(rc, K=K, seed=s) for s in dagnn_seeds]
+    if row == "DAGNN (per neighbour)":
+        return [_dagnn(rc, seed=s, feature_transform=PER_NEIGHBOUR) for s in dagnn_seeds]
     if row == "VGAI":
         F = int(column) if table == "F" else 24
         K = int(column) + 1 if table == "K" else 4

@@ -29,6 +29,10 @@ from ..vgai_training import train_vgai
 from .stage1_cache import cached
 from ..vision import VisionConfig
 
+PER_NEIGHBOUR = "per_neighbour"
+"""``DAGNNTrainConfig.feature_transform`` of the DAGNN trained once at N = 50, R = 1.5 m that flocks at
+N' = 200 (notebook 03, section 9): each feature a mean over the drone's neighbours, not a sum."""
+
 DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
     "dagnn_K4": DAGNNTrainConfig(),                          # the default: K - 1 = 3 exchanges
     "dagnn_K3": DAGNNTrainConfig(K=3),                       # Table 1b: K - 1 = 2
@@ -38,8 +42,11 @@ DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
     "dagnn_K4_mean": DAGNNTrainConfig(gso="row_normalized"), # GSO comparison (notebook 03)
     "dagnn_K4_sum": DAGNNTrainConfig(gso="adjacency"),
     "dagnn_K4_signed_log": DAGNNTrainConfig(feature_transform="signed_log"),
+    "dagnn_K4_per_neighbour": DAGNNTrainConfig(feature_transform=PER_NEIGHBOUR),  # Tables 2b and 3's extra row
 }
-"""The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name."""
+"""The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name. ``dagnn_K4`` is the paper's
+(eq. 4's sums); ``dagnn_K4_per_neighbour`` divides each sum by the drone's degree (notebook 03, section 9),
+the DAGNN that flies every team and radius of Tables 2b and 3 (their row "DAGNN (per neighbour)")."""
 
 VGAI_SEEDS = 3
 """Training seeds of the default VGAI the book ships (``train-vgai --seeds``; how long each took is in
