@@ -19,7 +19,8 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
-from vgai_lite.lab.reproduce import PAPER  # noqa: E402
+from vgai_lite.lab import findings  # noqa: E402
+from vgai_lite.lab.reproduce import PAPER, TABLES  # noqa: E402
 from vgai_lite.lab.runs import (PAPER_SEEDS, TIMED_ALONE, TRAINING_TARGET_MINUTES, chosen_camera_runs,  # noqa: E402
                                 how_trained, training_minutes)
 from vgai_lite.vgai_config import VGAITrainConfig, book_recipe  # noqa: E402
@@ -132,6 +133,8 @@ def section() -> str:
         f"{n75['velocity_variance_median']['2s']:.1e} / {n75['velocity_variance_median']['5s']:.1e} | "
         f"{n75['share_connected_at_end']:.0%} | {n75['episodes']} of seed {results['provenance']['reproduce_config']['seed']} | "
         "`python -m vgai_lite reproduce --only N` |",
+        *[_per_neighbour_row(results, t, c, label) for t, c, label in (("N", "200", "flown by N' = 200 (Table 3's cell)"),
+                                                                       ("R", "1.0", "flown at R = 1 m (Table 2b's cell)"))],
     ]
     d4, v24 = dagnn[4], vgai["F24"]
     text = [
@@ -170,6 +173,25 @@ def section() -> str:
     return "\n".join([BEGIN, *text, END])
 
 
+def _new_rows(cells: list) -> dict:
+    """{row: {tables}} of cells named "table/row/column"."""
+    rows: dict = {}
+    for c in cells:
+        table, row, _ = c.split("/")
+        rows.setdefault(row, set()).add(table)
+    return rows
+
+
+def _per_neighbour_row(results: dict, table: str, column: str, label: str) -> str:
+    """One cell of the tables' row "DAGNN (per neighbour)" (training seeds over which its interval is taken)."""
+    x = results["tables"][table]["rows"]["DAGNN (per neighbour)"][column]
+    lo, hi = findings.interval(x)
+    return (f"| DAGNN per neighbour (eq. 4's sums divided by the degree; not the paper's), trained on N = 50 at R = 1.5 m, "
+            f"{label}; {len(x['per_seed'])} training seeds | {x['relative_cost_mean']:.2f} ({lo:.2f}-{hi:.2f}) | - | "
+            f"{_flock(x)} | {x['episodes']} of seed {results['provenance']['reproduce_config']['seed']} per seed | "
+            f"`python -m vgai_lite reproduce --only {table}` |")
+
+
 def _how(record: dict) -> str:
     """" (1 thread, load 2.4)": how a training ran (``runs.how_trained``), or nothing if unrecorded."""
     how = how_trained(record)
@@ -193,8 +215,25 @@ def _tables(results: dict) -> str:
             f"(the invocations that computed them, with their commands and threads, are listed in "
             f"`data/results/results.json`).")
     timed_file = ROOT / "data" / "results" / "timed_run.json"
-    if timed_file.is_file():  # tools/experiments/reproduce_timed.py: every cell recomputed in one run
-        tr = json.loads(timed_file.read_text())
+    tr = json.loads(timed_file.read_text()) if timed_file.is_file() else None
+    if tr and tr.get("adopted") and tr["command"] == last["command"]:  # the tables ARE one timed run
+        big = tr["largest_difference"]
+        text = (f"The paper's tables (notebook 07; {rc['episodes']} episodes of seed {rc['seed']} per cell, "
+                f"{rc['episodes_large']} at N' >= 100; DAGNN rows over {rc['seeds']} training seeds, VGAI rows "
+                f"{rc['vgai_seeds']} training each) are one run, alone (`{tr['command']}`): all {tr['cells']} cells "
+                f"evaluated anew in a fresh folder from the shipped checkpoints, {tr['models_trained_now']} models trained, "
+                f"in {tr['wall_seconds'] / 60:.0f} min at {tr['provenance']['torch_threads']} threads, load average "
+                f"{tr['provenance']['load_average_mean']:.1f}. Against the tables before it, "
+                + ("the row " + " and ".join(f"*{row}* of " + " and ".join(sorted(TABLES[t]['title'].split(':')[0] for t in ts))
+                                             for row, ts in _new_rows(tr["cells_not_in_committed"]).items())
+                   + " is new, and " if tr.get("cells_not_in_committed") else "")
+                + ("every other cell's relative cost is the same to 1e-3" if tr["cells_equal_committed"] else
+                   "not every other cell's relative cost is the same to 1e-3")
+                + f" (the largest difference: {big['cell']}, {big['committed']} against {big['now']}, "
+                f"{abs(big['now'] - big['committed']) / big['committed']:.2%}). The trainings those checkpoints record "
+                f"took {tr['training_recorded_seconds'] / 3600:.1f} h more.")
+        tr = None
+    if tr:  # tools/experiments/reproduce_timed.py: every cell recomputed in one run
         big = tr["largest_difference"]
         text += (f" Recomputed as one run, alone (`{tr['command']}`: all {tr['cells']} cells evaluated anew in a fresh "
                  f"folder from the same checkpoints, {tr['models_trained_now']} models trained): "

@@ -23,7 +23,7 @@ frame a drone took at t - g, paired with the one of t (``vision``), is the very 
 noise included, and noise is independent between frames. (A training window's frames, its K steps
 and the frames g >= K steps before them, are all different frames: each draws its own noise.)
 
-The paper's authors test their VGAI with noise of sigma = 10/255 and a 5 x 5 box blur at 144 x 256
+The authors' released test script flies their VGAI with noise sigma = 10/255 and a 5 x 5 box blur at 144 x 256
 (about 0.5° of view); the book's training draws these settings per flight (``CameraRanges``, domain
 randomisation), and its robustness chapter (08) flies fixed ones (``lab.perturbations``).
 Shapes: frames (B, N, C0, H, W); per-swarm settings (B,).

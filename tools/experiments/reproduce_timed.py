@@ -40,6 +40,15 @@ def cell_costs(results: dict) -> dict[str, float]:
             for col, cell in cells.items() if cell is not None}
 
 
+def name_the_command(path: Path, command: str) -> None:
+    """The adopted results.json says which command computed it (``reproduce``'s provenance names the
+    script's own argv, which ``python -m vgai_lite`` would not rerun)."""
+    results = json.loads(path.read_text())
+    results["provenance"]["command"] = command
+    results["provenance"]["invocations"][-1]["command"] = command
+    path.write_text(json.dumps(results, indent=1) + "\n")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--threads", type=int, default=2)
@@ -88,6 +97,7 @@ def main(argv=None) -> int:
         shutil.copytree(work / "cells", results_dir / "cells")
         for name in ("results.json", "results.csv"):
             shutil.copy2(work / name, results_dir / name)
+        name_the_command(results_dir / "results.json", command)
         print(f"adopted: data/results/cells ({computed} cells), results.json and results.csv are this run's")
     if not args.work:
         shutil.rmtree(work)

@@ -59,10 +59,10 @@ plt.show()
 # | **flocked** | the book's one definition: a small velocity variance late in the flight (at 5 s) and the swarm still connected | 01, `evaluate.flocked` |
 # | **validation / test episodes** | initial conditions drawn from two seeds: every choice (recipe, hyperparameter, training seed) is made on the validation episodes; the reported numbers come from the test episodes, which no choice has seen | 01, `book.VALIDATION_SEED`, `book.TEST_SEED` |
 # | **working episodes** | a third seed's initial conditions, held out from training, on which the chapters draw their pictures and compare designs while they teach: not a test | 01, `book.WORKING_SEED` |
-# | **repair sampling** | drawing initial positions for large teams by moving the agents that break a constraint instead of redrawing the whole swarm | 01, `FlockConfig.init_method` |
+# | **repair sampling** | drawing initial positions for large teams by moving the agents that break a constraint instead of redrawing the whole swarm | 03 section 9, 07 (Table 3), `FlockConfig.init_method` |
 # | **DAgger round** | fly swarms with the expert and the learner mixed, label every visited state with the expert's action, add them to the data, refit | 03, `imitation.dagger_mix` |
 # | **the learner flying alone** | a share of each DAgger round's swarms flown by the learner at every step, so its own drift is in the data | 06, 11, `VGAITrainConfig.learner_swarms` |
-# | **prehistory** | the frames before $t = 0$, drawn from the initial velocities flown backwards, so the first motion image is not empty | 04, `VisionConfig.prehistory` |
+# | **prehistory** | the frames before $t = 0$, drawn from the initial velocities flown backwards, so the first motion image is not empty | 05, `VisionConfig.prehistory` |
 # | **odd motion features** | CNN features that change sign when the motion channel does, so they read zero when nothing moves | 05, 06, 11, `VisualCNN.motion_features` |
 # | **stage 1 / 2 / 3** | the book's VGAI training: the CNN warm-started as a state estimator, the MLP fitted on its features, then both trained together by K-step BPTT | 06, `vgai_training.train_vgai` |
 # | **modular vision pilot** | the CNN trained as a state estimator feeding the DAGNN's MLP, not trained end to end: the control experiment for VGAI | 09, 11 |
@@ -104,7 +104,7 @@ paper_vs_book.show()
 #   module per stage of the pipeline. When a notebook calls a function, open its file: the
 #   docstring carries the equation and the shapes of every tensor, with the paper's symbols
 #   ($\mathbf S$, $\mathbf X$, $\mathbf Z$, $K$, $F$, $R$, $\rho$).
-# * **Exercises** end each notebook from 01 to 08 (09 and 10 sum up and ask nothing): you write a real piece of the method (among them the GSO's
+# * **Exercises** end each notebook from 01 to 08 (09, 10 and 11 sum up or analyse, and ask nothing): you write a real piece of the method (among them the GSO's
 #   normalisation, DAgger's data aggregation and the K-step BPTT loss) and an automatic check
 #   tells you whether it is right, and if not, on which input it went wrong and which mistake that
 #   suggests; the open-ended experiments also ask for your written conclusion; the last cell gives

@@ -48,7 +48,7 @@ print("quick mode" if QUICK else "full mode")
 # ## 1. The constants
 #
 # `FlockConfig` holds the problem. The paper fixes $N = 50$, $R = 1.5$ m, $T_s = 0.01$ s,
-# $v_{init} = 3$ m/s and the $\pm 30$ m/s² saturation. It is silent on three things we had to
+# $v_{init} = 3$ m/s and the $\pm 30$ m/s² saturation. It is silent on three things the book had to
 # choose, each explained below: the potential's radius $\rho$, the episode length $T$, and the
 # initial disc (the text and the reference code disagree).
 
@@ -391,7 +391,8 @@ for name, traj in trajs.items():
 # the median over the episodes of each episode's closest approach and the share of episodes with a
 # pair closer than 0.05 m: bodies half into each other, a crash rather than a graze. The share
 # below 0.1 m (contact) is in every record too, and shown where a table has room. Since even the
-# expert comes that close in some episodes (its closest approaches are set by the initial
+# expert comes close in some episodes (closer than 0.1 m in some of the episodes below, closer than
+# 0.05 m in some of notebook 06's test episodes; its closest approaches are set by the initial
 # conditions, below), a controller is called **as safe as the expert** when its share below 0.05 m
 # is at most the expert's plus 4 points (or 5%, whichever is larger) and its median closest approach
 # at least 0.9 times the expert's, on the same episodes.
@@ -484,8 +485,8 @@ prose("""## What we have, and what comes next
 # [Notebook 02](02_graph_shift_operators.ipynb) introduces the communication graph and the **delayed aggregation sequence** that lets
 # an agent hear, with delay, from agents several hops away. Notebook 03 measures what it buys: a
 # learned controller on the same local features without any exchange already closes much of the
-# gap between Local and the expert (learning a better local rule); each exchange then closes part
-# of the rest.
+# gap between Local and the expert (learning a better local rule); the first exchange closes part
+# of the rest, and notebook 03 says, by its intervals, what the further ones add.
 #
 # ## References
 #

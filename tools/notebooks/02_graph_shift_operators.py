@@ -75,10 +75,10 @@ plt.show()
 #
 # The paper does not say which GSO its DAGNN uses; the public reference code averages
 # (`row_normalized`, "mean pooling"). **Our default is `sym_normalized`**, chosen by measurement in
-# notebook 03: summing (`adjacency`) imitates the expert best at the training size $N = 50$, but its
-# aggregated features grow with the number of neighbours and the controller falls apart in a denser
-# team of $N' = 100$; averaging transfers perfectly but imitates worse at $N = 50$; the symmetric
-# normalisation does both. The normalised operators keep repeated shifts $\mathbf S^k\mathbf X$ bounded
+# notebook 03 (section 9, on validation episodes): at the training size $N = 50$ the three cannot be
+# told apart; summing (`adjacency`) lets the aggregated features grow with the number of neighbours,
+# and in a denser team of $N' = 100$ its cost rises above the others'; no GSO costs less than the
+# symmetric normalisation at any team size. The normalised operators keep repeated shifts $\mathbf S^k\mathbf X$ bounded
 # (spectrum in $[-1, 1]$); the plain adjacency does not. (`spectral_normalized` is as stable, but
 # $\lambda_{max}$ is a property of the whole graph: no drone can compute it locally.)
 

@@ -500,8 +500,8 @@ display(Markdown("| test episodes (notebook 07) | " + " | ".join(f"{'N′' if t 
                  + " |\n|---|" + "---|" * len(cols) + "\n" + "\n".join(
                      f"| {row} | " + " | ".join(test_cell(tables[t]["rows"][row][str(c)]) for t, c in cols) + " |"
                      for row in ("DAGNN", "DAGNN (per neighbour)"))
-                 + "\n\nEach cell: relative cost (95 % interval over the three training seeds) · variance at 5 s [m²/s²] · "
-                   "connected at 5 s; R = 1.5 m is the column N′ = 50."))
+                 + f"\n\nEach cell: relative cost (95 % interval over {len(tables['N']['rows']['DAGNN']['50']['per_seed'])} training "
+                   "seeds) · variance at 5 s [m²/s²] · connected at 5 s; R = 1.5 m is the column N′ = 50."))
 
 # %% [markdown]
 # ## 10. What the cost measures, and what it does not

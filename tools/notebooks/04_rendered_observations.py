@@ -142,7 +142,8 @@ print(f"nearest neighbour {d.min():.2f} m away: about {2 * rcfg.focal * rcfg.bod
 #
 # One frame shows where the neighbours are, not how fast they move, and the expert's action is
 # dominated by velocity alignment. `with_motion` stacks a frame with an earlier one, or with the
-# scaled difference of the two: the option notebook 05 will compare.
+# scaled difference of the two (the book's choice); notebook 05 measures what the second frame buys
+# (one frame against two).
 
 # %%
 gap = 5
@@ -237,7 +238,7 @@ prose("In these {E} episodes the expert brings a pair closer than {d:g} m in {k}
       E=E, d=d, k=touching["Centralized"], c=with_contact["Centralized"],
       verdict=("They differ for some controller: pymunk resolves a contact inside a step, while the simulator "
                "reads distances at the sampling instants only." if not agree else
-               "The two agree for every controller; none of notebook 01's close calls falls in these episodes."
+               "The two agree for every controller: no pair's bodies touch in these episodes."
                if touching["Centralized"] == 0 else
                "The two agree for every controller: these are real contacts, which notebook 01 counts among "
                "its close calls."))

@@ -97,8 +97,8 @@ plt.show()
 # and no return stays 0. (Adding $\sigma$ to $D$ as to an intensity would be a range error of
 # $\sigma / D$: 50% at 2 m for $\sigma$ = 0.05, where a commodity depth camera errs by about 2%.) The noise of a frame is
 # drawn from its own time, so the frame of $t - g$ that the motion channel pairs with the frame of
-# $t$ is the one the drone really saw then. The paper's authors test their VGAI with $\sigma$ =
-# 10/255 and a 5 × 5 box blur at 144 × 256, about 0.5°. Below, drone 0's front camera (gray channel
+# $t$ is the one the drone really saw then. The authors' released test script (not the paper) flies their VGAI
+# with $\sigma$ = 10/255 and a 5 × 5 box blur at 144 × 256, about 0.5°. Below, drone 0's front camera (gray channel
 # and the motion channel) at a few settings: the motion channel is where the noise hurts, since it
 # is a difference of two noisy frames, amplified by the same gain that makes the small motions
 # readable. A training can draw these settings per flight (`VGAITrainConfig.camera`, a

@@ -88,7 +88,7 @@ plt.show()
 #
 # Every stage sees its frames through a camera (`camera`): sensor noise, lens blur, exposure and a
 # dead camera, drawn per flight and per training window (domain randomisation, `BOOK_CAMERA`),
-# so that the controller still flocks under the perturbations the paper's authors test with;
+# so that the controller still flocks under the perturbations the authors' released test script applies;
 # notebook 08 builds the camera and chooses its ranges.
 #
 # The CNN's last $F/3$ features are odd in the motion channels (`motion_features`). Notebook 11
@@ -128,18 +128,21 @@ hist = vgai.meta["history"]
 print(vgai)
 record = json.loads((DATA_DIR / "vgai" / "vgai_F24.json").read_text())
 print(f"trained in {training_minutes(record):.0f} min, stages 1 to 3 (stage 1: "
-      f"{(record.get('stage1_seconds') or 0) / 60:.0f} min of them), by its record")
+      f"{(record.get('stage1_seconds') or 0) / 60:.0f} min of them), by its record"
+      + (f"; {how_trained(record)}" if how_trained(record) else ""))
 
 # %% [markdown]
 # **Where a training's minutes go.** Every training records the seconds of each phase
-# (`seconds_by_phase` in its history). The one below is the same recipe from another seed,
-# trained alone on the two cores with nothing else running, so its minutes are the recipe's own.
+# (`seconds_by_phase` in its history). The shipped training's minutes above were taken while
+# another job shared the two cores, so they overstate the recipe's. The one below is the same recipe
+# from another seed, with the two cores to itself, so its minutes are the recipe's own.
 
 # %%
 alone = json.loads((DATA_DIR / "experiments" / f"{TIMED_ALONE}.json").read_text())
 phases, total = alone["seconds_by_phase"], alone["train_seconds"]
 display(Markdown(f"Training seed {alone['train_config']['seed']}, {how_trained(alone)}: "
-                 f"{total / 60:.0f} min in all (the target: at most {TRAINING_TARGET_MINUTES}).\n\n"
+                 f"{total / 60:.0f} min in all (the book's budget for one training on two cores: "
+                 f"{TRAINING_TARGET_MINUTES} min).\n\n"
                  "| phase | minutes | share |\n|---|---|---|\n"
                  + "\n".join(f"| {k} | {v / 60:.1f} | {v / total:.0%} |" for k, v in phases.items())
                  + f"\n| the rest (saving checkpoints, bookkeeping) | {(total - sum(phases.values())) / 60:.1f} | "
@@ -208,8 +211,8 @@ v, d, l = test["vgai_F24"], test["dagnn_K4"], test["local"]
 safe = as_safe_as_expert(v)
 prose("A swarm that sees only images and talks to its neighbours lands between the exact-feature DAGNN ({dc:.2f}) and "
       "the local heuristic ({lc:.2f}) at a relative cost of {vc:.2f} (the paper prints {vp:.2f} for its VGAI, which sees "
-      "one gray frame and no depth; notebook 11, section 2, flies the paper's VGAI in this simulator, so the two numbers are not the "
-      "same method). {flock} "
+      "one camera image per step and no depth, in AirSim; notebook 11, section 2, flies the paper's VGAI in this simulator "
+      "with one gray frame standing for that image, so the two numbers are not the same method). {flock} "
       "{safety}",
       dc=d["relative_cost_mean"], lc=l["relative_cost_mean"], vc=v["relative_cost_mean"], vp=PAPER["R"]["VGAI"][1.5],
       flock=("It flocks: at 5 s its drones' velocities differ by {rms:.3f} m/s RMS ({ratio:.0f}× the DAGNN's variance), "

@@ -58,9 +58,11 @@ print(f"{cs['cells']} cells (data/results/results.json; its provenance says how 
 print("settings:", prov["reproduce_config"])
 timed = json.loads((DATA_DIR / "results" / "timed_run.json").read_text())  # tools/experiments/reproduce_timed.py
 big = timed["largest_difference"]
-print(f"recomputed as one run alone: all {timed['cells']} cells in {timed['wall_seconds'] / 60:.0f} min at "
+print(("these tables are one run, alone" if timed.get("adopted") else "recomputed as one run alone")
+      + f": all {timed['cells']} cells in {timed['wall_seconds'] / 60:.0f} min at "
       f"{timed['provenance']['torch_threads']} threads, {timed['models_trained_now']} models trained; largest difference "
-      f"from the committed cells: {big['cell']}, {big['committed']} -> {big['now']}")
+      f"from the tables before it: {big['cell']}, {big['committed']} -> {big['now']}"
+      + (f"; new: {', '.join(timed['cells_not_in_committed'])}" if timed.get("cells_not_in_committed") else ""))
 assert prov["reproduce_config"]["seed"] == TEST_SEED, "the tables are reported on the test episodes only"
 
 # %% [markdown]
@@ -617,7 +619,7 @@ display(Markdown("\n".join([
 # %%
 from vgai_lite.evaluate import as_safe_as_expert
 
-TEAM_RUNS = {"shipped (N = 50, R = 1.5 m)": "dagnn_K4", "teams 50, 100, 200": "dagnn_teams",
+TEAM_RUNS = {"the paper's DAGNN, dagnn_K4 (N = 50, R = 1.5 m)": "dagnn_K4", "teams 50, 100, 200": "dagnn_teams",
              "R in [1, 2] m": "dagnn_radii", "both": "dagnn_teams_radii",
              "teams 50, 100 (the expert stable)": "dagnn_teams_stable",
              "teams 50, 100 and R in [1, 2] m": "dagnn_teams_radii_stable",
@@ -639,15 +641,15 @@ display(Markdown("| DAGNN trained over | " + " | ".join(c.replace("N=", "N' = ")
                      for label, cells in team_recs.items())
                  + "\n\nEach cell: relative cost · median velocity variance at 5 s [m²/s²] · connected at 5 s · "
                    f"flocked; {next(iter(team_recs['both'].values()))['episodes']} validation episodes per cell."))
-shipped_t, both_t = team_recs["shipped (N = 50, R = 1.5 m)"], team_recs["both"]
+shipped_t, both_t = team_recs["the paper's DAGNN, dagnn_K4 (N = 50, R = 1.5 m)"], team_recs["both"]
 newly_flocked = [c for c in team_cols if flocked(both_t[c]) and not flocked(shipped_t[c])]
 def lower(c):  # by the book's one rule (intervals apart), not by the point estimates
     return {-1: "below", 0: "level with (intervals overlap)", 1: "above"}[findings.compare(both_t[c], shipped_t[c])]
 
 
 
-prose("Drawing both in training makes the DAGNN flock where the shipped one does not in {newly}. At N' = 200 its "
-      "variance at 5 s is {b200:.1e} m²/s² against the shipped one's {s200:.1e}, at R = 1 m {b1:.1e} against {s1:.1e} "
+prose("Drawing both in training makes the DAGNN flock where dagnn_K4 does not in {newly}. At N' = 200 its "
+      "variance at 5 s is {b200:.1e} m²/s² against dagnn_K4's {s200:.1e}, at R = 1 m {b1:.1e} against {s1:.1e} "
       "(connected at 5 s in {bc1:.0%} and {sc1:.0%} of episodes). Its costs at N' = 100 and 200 ({c100:.2f}, {c200:.2f}) "
       "are {lower}: eq. 1 weighs the first second, the "
       "flock the last ones.",
@@ -656,9 +658,9 @@ prose("Drawing both in training makes the DAGNN flock where the shipped one does
       b1=both_t["R=1.0"]["velocity_variance_median"]["5s"], s1=shipped_t["R=1.0"]["velocity_variance_median"]["5s"],
       bc1=both_t["R=1.0"]["share_connected_at_end"], sc1=shipped_t["R=1.0"]["share_connected_at_end"],
       c100=both_t["N=100"]["relative_cost_mean"], c200=both_t["N=200"]["relative_cost_mean"],
-      lower=(f"{lower('N=100')} the shipped one's ({shipped_t['N=100']['relative_cost_mean']:.2f}, "
+      lower=(f"{lower('N=100')} dagnn_K4's ({shipped_t['N=100']['relative_cost_mean']:.2f}, "
              f"{shipped_t['N=200']['relative_cost_mean']:.2f}) at both" if lower("N=100") == lower("N=200") else
-             f"{lower('N=100')} the shipped one's at N' = 100 ({shipped_t['N=100']['relative_cost_mean']:.2f}) and "
+             f"{lower('N=100')} dagnn_K4's at N' = 100 ({shipped_t['N=100']['relative_cost_mean']:.2f}) and "
              f"{lower('N=200')} it at 200 ({shipped_t['N=200']['relative_cost_mean']:.2f})"))
 
 # %%

@@ -99,10 +99,10 @@ paper_costs = [test[f"vgai_paper_seed{s}"]["relative_cost_mean"] for s in PAPER_
 display(prose("On these episodes the DAGNN is {dv} VGAI and VGAI is {vl} the local heuristic (the paper: DAGNN < VGAI < Local), "
       "at lower costs than the paper's: VGAI {vc:.2f} against the paper's {vp:.2f}, the DAGNN {dc:.2f} against {dp:.2f}. "
       "{flock} The paper's VGAI as the paper describes it, trained at the book's budget, costs {plo:.2f} to {phi:.2f} "
-      "over three training seeds and flocks in {pfl} of them (variance at 5 s {pv} m²/s²; notebook 11 sets it beside a "
+      "over {pn} training seeds and flocks in {pfl} of them (variance at 5 s {pv} m²/s²; notebook 11 sets it beside a "
       "swarm that does nothing), so "
       "the book's VGAI is the paper's method with the book's departures, not the paper's VGAI reproduced.",
-      pfl=sum(flocked(test[f"vgai_paper_seed{s}"]) for s in PAPER_SEEDS),
+      pn=len(PAPER_SEEDS), pfl=sum(flocked(test[f"vgai_paper_seed{s}"]) for s in PAPER_SEEDS),
       pv=", ".join(f"{test[f'vgai_paper_seed{s}']['velocity_variance_median']['5s']:.1e}" for s in PAPER_SEEDS),
       dv=order[compare(d, v)], vl=order[compare(v, l)],
       vc=v["relative_cost_mean"], vp=PAPER["R"]["VGAI"][1.5], dc=d["relative_cost_mean"], dp=PAPER["R"]["DAGNN"][1.5],
@@ -237,6 +237,8 @@ clean_cams = load(f"experiments/{CLEAN_SEED_RUNS[0]}_cameras.json")["settings"]
 clean_breaks = noise_that_breaks(clean_cams)
 expert_200 = load("experiments/expert_stability.json")["teams"]["200"]
 does = lambda rec: "does" if flocked(rec) else "does not"
+pn_n, dg_n = ({c: results["tables"]["N"]["rows"][row][f"{c:g}"] for c in n_cols} for row in ("DAGNN (per neighbour)", "DAGNN"))
+pn_r1 = results["tables"]["R"]["rows"]["DAGNN (per neighbour)"]["1.0"]
 items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "
     f"the gray channel only, trained on clean frames, it {does(gray)} (variance at 5 s "
@@ -261,7 +263,12 @@ items = [
     f"At N' = 200 the teacher itself does not flock: the expert of eq. 2, sampled at Ts = {expert_200['Ts']:g} s, "
     f"multiplies each velocity deviation by 1 − N Ts = {expert_200['predicted_factor']:+.0f} per step, and its variance "
     f"at 5 s is {expert_200['expert']['velocity_variance_median']['5s']:.1e} m²/s² "
-    f"(`data/experiments/expert_stability.json`, notebook 03).",
+    f"(`data/experiments/expert_stability.json`, notebook 03). The DAGNN with each of eq. 4's sums divided by the "
+    "drone's number of neighbours (the row *DAGNN (per neighbour)* of Tables 2b and 3, trained once on 50 drones at "
+    "R = 1.5 m) flocks at N' = " + (", ".join(f"{c:g}" for c in n_cols if flocked(pn_n[c])) or "none")
+    + f" (variance at 5 s at N' = {n_cols[-1]:g}: {pn_n[n_cols[-1]]['velocity_variance_median']['5s']:.1e} m²/s², the "
+    f"paper's DAGNN {dg_n[n_cols[-1]]['velocity_variance_median']['5s']:.1e}); at R = 1 m its swarm is connected at 5 s "
+    f"in {pn_r1['share_connected_at_end']:.0%} of episodes (variance {pn_r1['velocity_variance_median']['5s']:.1e} m²/s²).",
     f"* **Noisy cameras.** With pixel noise of sigma {robustness.TARGETS['image_noise_sigma']:g} the book's VGAI, "
     f"trained through the camera, costs {noisy['relative_cost_mean']:.2f} on the test episodes and {does(noisy)} flock "
     f"(variance at 5 s {noisy['velocity_variance_median']['5s']:.1e} m²/s²; notebook 08). Trained on clean frames, the "
