@@ -20,7 +20,7 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, flocked  # noqa: E402
 from vgai_lite.lab.ray_runner import projected_hours  # noqa: E402
 from vgai_lite.lab import findings  # noqa: E402
-from vgai_lite.lab.reproduce import PAPER, TABLES  # noqa: E402
+from vgai_lite.lab.reproduce import PAPER  # noqa: E402
 from vgai_lite.lab.runs import (PAPER_SEEDS, TIMED_ALONE, TRAINING_TARGET_MINUTES, chosen_camera_runs,  # noqa: E402
                                 how_trained, training_minutes)
 from vgai_lite.vgai_config import VGAITrainConfig, book_recipe  # noqa: E402
@@ -95,6 +95,7 @@ def _test_table() -> list:
 
 def section() -> str:
     dagnn = {k: _load(f"data/dagnn/dagnn_K{k}.json") for k in (1, 2, 3, 4)}
+    pn_rec = _load("data/dagnn/dagnn_K4_per_neighbour.json")
     vgai = {n: _load(f"data/vgai/vgai_{n}.json") for n in ("F24", "F12", "F6", "K3", "K2")}
     results = _load("data/results/results.json")
     choice = _load("data/vgai/seeds/choice.json")
@@ -133,8 +134,9 @@ def section() -> str:
         f"{n75['velocity_variance_median']['2s']:.1e} / {n75['velocity_variance_median']['5s']:.1e} | "
         f"{n75['share_connected_at_end']:.0%} | {n75['episodes']} of seed {results['provenance']['reproduce_config']['seed']} | "
         "`python -m vgai_lite reproduce --only N` |",
-        *[_per_neighbour_row(results, t, c, label) for t, c, label in (("N", "200", "flown by N' = 200 (Table 3's cell)"),
-                                                                       ("R", "1.0", "flown at R = 1 m (Table 2b's cell)"))],
+        f"| DAGNN, K-1 = 3, features per neighbour (eq. 4's sums divided by the degree; not the paper's) | "
+        f"{_ci(pn_rec)} | - | {_flock(pn_rec)} | {_episodes(pn_rec)} | "
+        "`python -m vgai_lite train-dagnn dagnn_K4_per_neighbour` |",
     ]
     d4, v24 = dagnn[4], vgai["F24"]
     text = [
@@ -173,23 +175,20 @@ def section() -> str:
     return "\n".join([BEGIN, *text, END])
 
 
-def _new_rows(cells: list) -> dict:
-    """{row: {tables}} of cells named "table/row/column"."""
-    rows: dict = {}
-    for c in cells:
-        table, row, _ = c.split("/")
-        rows.setdefault(row, set()).add(table)
-    return rows
-
-
-def _per_neighbour_row(results: dict, table: str, column: str, label: str) -> str:
-    """One cell of the tables' row "DAGNN (per neighbour)" (training seeds over which its interval is taken)."""
-    x = results["tables"][table]["rows"]["DAGNN (per neighbour)"][column]
-    lo, hi = findings.interval(x)
-    return (f"| DAGNN per neighbour (eq. 4's sums divided by the degree; not the paper's), trained on N = 50 at R = 1.5 m, "
-            f"{label}; {len(x['per_seed'])} training seeds | {x['relative_cost_mean']:.2f} ({lo:.2f}-{hi:.2f}) | - | "
-            f"{_flock(x)} | {x['episodes']} of seed {results['provenance']['reproduce_config']['seed']} per seed | "
-            f"`python -m vgai_lite reproduce --only {table}` |")
+def _per_neighbour_cells(results: dict) -> str:
+    """The tables' row "DAGNN (per neighbour)" at N' = 200 and R = 1 m against the paper's DAGNN, in one sentence."""
+    rows = results["tables"]
+    def cell(table, row, column):
+        x = rows[table]["rows"][row][column]
+        lo, hi = findings.interval(x)
+        return (f"{x['relative_cost_mean']:.2f} ({lo:.2f}-{hi:.2f}), variance at 5 s "
+                f"{x['velocity_variance_median']['5s']:.1e} m²/s², connected at 5 s in {x['share_connected_at_end']:.0%}, "
+                + ("flocked" if flocked(x) else "not flocked"))
+    seeds = len(rows["N"]["rows"]["DAGNN (per neighbour)"]["200"]["per_seed"])
+    return (f" The row *DAGNN (per neighbour)* of Tables 2b and 3 (the paper's DAGNN with eq. 4's sums divided by each "
+            f"drone's degree, trained at N = 50 and R = 1.5 m, {seeds} training seeds): at N' = 200 "
+            f"{cell('N', 'DAGNN (per neighbour)', '200')}, against the paper's DAGNN's {cell('N', 'DAGNN', '200')}; at R = 1 m "
+            f"{cell('R', 'DAGNN (per neighbour)', '1.0')}, against {cell('R', 'DAGNN', '1.0')}.")
 
 
 def _how(record: dict) -> str:
@@ -217,21 +216,14 @@ def _tables(results: dict) -> str:
     timed_file = ROOT / "data" / "results" / "timed_run.json"
     tr = json.loads(timed_file.read_text()) if timed_file.is_file() else None
     if tr and tr.get("adopted") and tr["command"] == last["command"]:  # the tables ARE one timed run
-        big = tr["largest_difference"]
         text = (f"The paper's tables (notebook 07; {rc['episodes']} episodes of seed {rc['seed']} per cell, "
                 f"{rc['episodes_large']} at N' >= 100; DAGNN rows over {rc['seeds']} training seeds, VGAI rows "
-                f"{rc['vgai_seeds']} training each) are one run, alone (`{tr['command']}`): all {tr['cells']} cells "
-                f"evaluated anew in a fresh folder from the shipped checkpoints, {tr['models_trained_now']} models trained, "
-                f"in {tr['wall_seconds'] / 60:.0f} min at {tr['provenance']['torch_threads']} threads, load average "
-                f"{tr['provenance']['load_average_mean']:.1f}. Against the tables before it, "
-                + ("the row " + " and ".join(f"*{row}* of " + " and ".join(sorted(TABLES[t]['title'].split(':')[0] for t in ts))
-                                             for row, ts in _new_rows(tr["cells_not_in_committed"]).items())
-                   + " is new, and " if tr.get("cells_not_in_committed") else "")
-                + ("every other cell's relative cost is the same to 1e-3" if tr["cells_equal_committed"] else
-                   "not every other cell's relative cost is the same to 1e-3")
-                + f" (the largest difference: {big['cell']}, {big['committed']} against {big['now']}, "
-                f"{abs(big['now'] - big['committed']) / big['committed']:.2%}). The trainings those checkpoints record "
-                f"took {tr['training_recorded_seconds'] / 3600:.1f} h more.")
+                f"{rc['vgai_seeds']} training each, training seed 0 of every configuration, so the F = 24 cell is not "
+                f"the headline VGAI above) are one run, alone (`{tr['command']}`): {tr['cells']} evaluations (a DAGNN "
+                f"cell is one per training seed) from the shipped checkpoints, {tr['models_trained_now']} models trained, "
+                f"in {tr['wall_seconds'] / 60:.0f} min at {tr['provenance']['torch_threads']} threads "
+                f"(`data/results/timed_run.json` holds the run's provenance). The trainings those checkpoints record "
+                f"took {tr['training_recorded_seconds'] / 3600:.1f} h more." + _per_neighbour_cells(results))
         tr = None
     if tr:  # tools/experiments/reproduce_timed.py: every cell recomputed in one run
         big = tr["largest_difference"]
@@ -292,7 +284,7 @@ def _robustness() -> str:
             f"{res['config']['seed']} per "
             f"cell): with {T['links_p']:.0%} of messages lost VGAI costs {_ci(links)} (clean {_ci(clean)}; Local "
             f"unperturbed {local['relative_cost_mean']:.2f}), connected at 5 s in {links['share_connected_at_end']:.0%} "
-            f"of episodes; the DAGNN {_ci(dl)}. With pixel noise sigma = {T['image_noise_sigma']:g} on the gray channel "
+            f"of episodes; the paper's DAGNN (dagnn_K4) {_ci(dl)}. With pixel noise sigma = {T['image_noise_sigma']:g} on the gray channel "
             f"VGAI costs {_ci(noisy)}, {noisy['relative_cost_mean'] / clean['relative_cost_mean']:.2f}x its clean cost. "
             f"The recipe through the camera, training seed 0 (notebook 08, section 6; "
             f"{cams['gray + depth'][1]['clean']['episodes']} validation episodes; gray + depth is the book's recipe): "

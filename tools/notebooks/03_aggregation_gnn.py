@@ -241,7 +241,7 @@ prose("The choice of the features' transform, on {n} validation episodes (seed {
                   "paper's."}[findings.compare(val["raw features"], val["signed-log features"])])
 
 # %% [markdown]
-# Our DAGNN comes closer to the expert than the paper's (1.70): our simulator is the double
+# Our DAGNN comes closer to the expert than the paper's (its number is in the table's paper column): our simulator is the double
 # integrator the paper states, not AirSim's drones with their own dynamics and latencies, and we
 # spend the updates where the labels live. It is also **as safe as the expert**: its closest
 # approaches match the expert's, because it learned the saturated braking of the first steps (the
@@ -297,8 +297,8 @@ prose("By the book's one criterion (`vgai_lite/lab/findings.py`: a cost is lower
 # %% [markdown]
 # ## 8. How many exchanges (Table 1b)
 #
-# With $K-1$ exchanges an agent hears, with delay, from $K-1$ hops away. The paper's DAGNN row:
-# 1.94, 1.82, 1.70 for 1, 2, 3 exchanges. Ours, including $K-1 = 0$ (features only, no
+# With $K-1$ exchanges an agent hears, with delay, from $K-1$ hops away. The paper's DAGNN row is
+# in the table's paper column. Ours, including $K-1 = 0$ (features only, no
 # communication beyond sensing):
 
 # %%
@@ -375,7 +375,7 @@ prose("By the book's one criterion (intervals apart): at N = 50 summing is {s50}
 #
 # ### The expert itself, in larger teams
 #
-# Before asking the DAGNN to flock in teams of 200, ask the teacher. Unsaturated and away from the
+# Before asking a DAGNN to flock in teams of 200, ask the teacher. Unsaturated and away from the
 # potential, the expert of eq. 2 gives every drone $\mathbf u_i = -\sum_j(\mathbf v_i - \mathbf v_j)
 # = N(\bar{\mathbf v} - \mathbf v_i)$, and the double integrator steps
 # $\mathbf v_i(t+1) = \mathbf v_i(t) + T_s \mathbf u_i(t)$, so a drone's deviation from the mean obeys
@@ -410,11 +410,11 @@ import json
 
 stab = json.loads((DATA_DIR / "experiments" / "expert_stability.json").read_text())["teams"]["200"]
 sign = lambda a: "alternates in sign" if a is not None and a < 0 else "keeps its sign"
-prose("So a student who asks the DAGNN to flock at N' = 200 asks more than its teacher does. "
+prose("So a student who asks the DAGNN to imitate its teacher at N' = 200 asks it to imitate a teacher that does not flock. "
       "`tools/experiments/expert_stability.py` measures the step factor late in the flight (the regression "
       "of each drone's deviation on the one a step before; record `data/experiments/expert_stability.json`, "
-      "10 validation episodes): at N' = 200 the expert's is {e:+.2f}, so its deviation {es}; the DAGNN "
-      "trained at N = 50 has {k:+.2f} (its deviation {ks}: it never learned the oscillation), and one "
+      "10 validation episodes): at N' = 200 the expert's is {e:+.2f}, so its deviation {es}; the paper's DAGNN "
+      "trained at N = 50 (dagnn_K4, eq. 4's sums) has {k:+.2f} (its deviation {ks}: it never learned the oscillation), and one "
       "trained on teams of 50, 100 and 200 has {t:+.2f} (its deviation {ts}: imitating the expert in "
       "those teams taught it the oscillation).",
       e=stab["expert"]["measured_factor"], es=sign(stab["expert"]["measured_factor"]),
@@ -430,16 +430,19 @@ prose("So a student who asks the DAGNN to flock at N' = 200 asks more than its t
 # $\sum_{j \in \mathcal N_i}(\mathbf v_i - \mathbf v_j) = n_i(\mathbf v_i - \bar{\mathbf v}_i)$, so the action
 # it should map to is $-(N / n_i)$ times it: a gain that depends on the degree $n_i$, which none of the
 # six features carries. Trained at $N = 50$ and $R = 1.5$ m the DAGNN learns the gain of that degree;
-# in a denser team (larger $N'$) it brakes too hard, with a smaller radius (fewer neighbours) too
-# softly. Divided by $n_i$ (`local_features(..., per_neighbour=True)`,
-# `DAGNNTrainConfig(feature_transform="per_neighbour")`), each feature is a mean and the action is
-# $-N$ times it at every density and radius. Each drone counts its own neighbours, so it stays local.
+# in a denser team (larger $N'$) or with a smaller radius (fewer neighbours) the degree differs, and
+# the gain it applies is off. Divided by $n_i$ (`local_features(..., per_neighbour=True)`,
+# `DAGNNTrainConfig(feature_transform="per_neighbour")`), each feature is a mean, and the network maps
+# it with the training team's gain at every density and radius. In a larger team that is not the
+# expert's gain (which grows with $N'$ and, sampled at $T_s$, is past stability at $N' = 200$, above):
+# the network keeps the gain its training team could damp with. Each drone counts its own
+# neighbours, so it stays local.
 # Both trained at $N = 50$, $R = 1.5$ m, flown across the columns of Tables 2b and 3 on validation
 # episodes (`python tools/experiments/teams_and_radii.py --name dagnn_per_neighbour --feature-transform
 # per_neighbour`, three training seeds):
 
 # %%
-from vgai_lite.evaluate import flocked, variance_text
+from vgai_lite.evaluate import FLOCKED_VARIANCE, flocked, variance_text
 
 PER_NEIGHBOUR = {"sums (eq. 4, the paper's)": ["dagnn_K4"],
                  "per neighbour": ["dagnn_per_neighbour", "dagnn_per_neighbour_seed1", "dagnn_per_neighbour_seed2"]}
@@ -458,7 +461,9 @@ display(Markdown("| DAGNN features | training seed | " + " | ".join(c.replace("N
 pn = pn_cells["per neighbour"]
 display(prose("Per neighbour, {f100} of {n} training seeds flock at N' = 100 and {f200} of {n} at N' = 200 (the sums: "
       "{s200} at N' = 200); at R = 1 m their swarms stay connected at 5 s in {c1} of episodes (the sums: {sc1:.0%}), "
-      "and {r1} of {n} keep the variance at 5 s at or below 1e-2 m²/s².",
+      "and {r1} of {n} keep the variance at 5 s at or below 1e-2 m²/s² (a swarm roughly aligned, a looser line than "
+      "the flock's {fv:g}); {fr1} of {n} flock there.",
+      fv=FLOCKED_VARIANCE, fr1=sum(flocked(x["R=1.0"]) for x in pn),
       n=len(pn), f100=sum(flocked(x["N=100"]) for x in pn), f200=sum(flocked(x["N=200"]) for x in pn),
       s200="flocked" if flocked(pn_cells["sums (eq. 4, the paper's)"][0]["N=200"]) else "not flocked",
       c1=", ".join(f"{x['R=1.0']['share_connected_at_end']:.0%}" for x in pn),
@@ -476,7 +481,7 @@ prose("What a drone can know is not what holds the sums back at R = 1 m: an orac
 
 # %% [markdown]
 # Chosen on those validation episodes, the features per neighbour are what the book ships for every team
-# and radius: `dagnn_K4_per_neighbour` (`data/dagnn/`, `runs.DAGNN_RUNS`, training seed 0; seeds 1 and 2
+# size: `dagnn_K4_per_neighbour` (`data/dagnn/`, `runs.DAGNN_RUNS`, training seed 0; seeds 1 and 2
 # are trained by `python -m vgai_lite reproduce`). Notebook 07's Tables 2b and 3 fly it on the test episodes
 # (reporting only) in the row *DAGNN (per neighbour)*, beside the paper's DAGNN (`dagnn_K4`, eq. 4's sums),
 # which stays the book's DAGNN everywhere else: it is the paper's baseline. The two rows, from the tables:
@@ -667,7 +672,7 @@ display(Markdown("| training | seed 0 | seed 1 | spread between the seeds |\n|--
 #
 # * The DAGNN: exact local features, the delayed aggregation, one MLP shared by every drone, trained by imitating the expert.
 # * DAgger shows the learner the states its own mistakes lead to; for the DAGNN, whose mistakes are small, section 7 measures what it buys.
-# * Exchanging with neighbours helps (section 8 says by how much, exchange by exchange); the GSO decides whether a controller trained with 50 drones works in denser teams.
+# * Exchanging with neighbours helps (section 8 says by how much, exchange by exchange); the GSO, and whether the features are sums or means per neighbour (section 9), decide whether a controller trained with 50 drones works in denser teams.
 # * The cost hides what happens late in a flight: judge every controller by its cost, its safety and whether it flocked.
 #
 # ## Next

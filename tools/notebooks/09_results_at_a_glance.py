@@ -186,8 +186,8 @@ prose("{verdict}", verdict=(f"{len(counter)} controllers or cells cost less than
 #   agreement is by construction, not a finding.
 #
 # **What disfavours them.** Our images are 12 × 128 pixels from four cameras, the CNN is sized to
-# train on two CPU cores (section 1 gives each training's minutes), and each configuration of the
-# tables is one training.
+# train on two CPU cores (section 1 gives each training's minutes), and each VGAI cell of the
+# tables is one training (the DAGNN rows average three training seeds).
 
 # %%
 gray, seed0 = load("experiments/vgai_learner_gray.json"), load(f"experiments/{CLEAN_SEED_RUNS[0]}.json")
@@ -303,7 +303,8 @@ items = [
        + " minutes" if results["tables"]["R"]["rows"].get("VGAI (retrained)") else
        "; the VGAIs of Table 2b's extra row (retrained at R = 1.0 and 2.0 m) are not trained with this recipe "
        "(`reproduce --extras` trains them)")
-    + ". So each table cell is one training; the spread over training seeds of every VGAI cell is not measured.",
+    + ". So each VGAI cell of the tables is one training; the spread over training seeds of every VGAI cell is not "
+    "measured (the DAGNN rows average their training seeds).",
     "* **The paper's simulator.** AirSim's dynamics and cameras are not reproduced; the findings, not the numbers, "
     "are what should carry over.",
 ]
