@@ -148,8 +148,8 @@ def section() -> str:
            " Every VGAI here is trained with the book's recipe (notebook 11, section 1)."),
         "",
         f"Training time on this 2-core machine: the default DAGNN {d4['train_seconds']:.0f} s alone. The VGAIs, stages "
-        "1-3 in minutes, with the torch threads and the machine's mean load average while each trained (its record's "
-        "provenance: one thread at a load near 2 or above is a training that shared the two cores with another job): "
+        "1-3 in minutes, with their torch threads and whether each had the two cores to itself or shared them with "
+        "another job (read from its record's provenance, `runs.how_trained`): "
         + ", ".join(f"seed {choice['candidates'][n]['training_seed']} {vg_minutes(r):.0f}{_how(r)}" for n, r in seed_recs.items())
         + "; " + ", ".join(f"{n}{_recipe(r)} {vg_minutes(r):.0f}{_how(r)}" for n, r in vgai.items() if n != "F24")
         + " (`runs.training_minutes`: a run that reused a cached first stage adds that stage's recorded time). "
