@@ -7,7 +7,9 @@ browser tests (tests/test_browser.py, tests/test_site.py)."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
 import socket
 import subprocess
 import time
@@ -37,12 +39,14 @@ def wait_http(url: str, seconds: float, proc: subprocess.Popen, what: str) -> by
 
 
 def start_chromium(port: int, profile) -> subprocess.Popen:
-    """Headless Chromium with its DevTools endpoint on ``port`` and a fresh profile folder."""
+    """Headless Chromium with its DevTools endpoint on ``port`` and a fresh profile folder, in a process
+    group of its own, so that ``stop`` ends its renderer and helper processes too (they write to the
+    profile folder: one left running fails the removal of that folder)."""
     return subprocess.Popen([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                              "--no-first-run", "--disable-background-networking", "--disable-component-update",
                              "--disable-sync", "--enable-unsafe-swiftshader", "--window-size=1400,1000",
                              f"--remote-debugging-port={port}", f"--user-data-dir={profile}", "about:blank"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
 
 
 class DevTools:
@@ -94,10 +98,31 @@ class DevTools:
 
 
 def stop(*procs: subprocess.Popen, seconds: float = 20) -> None:
-    """End each process (the browser, a server): terminate, then kill if it has not exited within ``seconds``."""
+    """End each process (the browser, a server): terminate, then kill if it has not exited within ``seconds``.
+    A process that leads its own group (``start_chromium``'s) takes its whole group with it: the group is
+    killed once its leader has gone, so that no child of it outlives the call."""
     for p in procs:
-        p.terminate()
+        group = _own_group(p)
+        p.terminate() if group is None else _signal_group(group, signal.SIGTERM)
         try:
             p.wait(timeout=seconds)
         except subprocess.TimeoutExpired:
             p.kill()
+            p.wait()
+        if group is not None:
+            _signal_group(group, signal.SIGKILL)
+
+
+def _own_group(p: subprocess.Popen):
+    """The process group ``p`` leads, or None (it shares ours, or has already gone)."""
+    try:
+        return p.pid if os.getpgid(p.pid) == p.pid else None
+    except ProcessLookupError:
+        return None
+
+
+def _signal_group(group: int, sig) -> None:
+    try:
+        os.killpg(group, sig)
+    except ProcessLookupError:  # every process of the group has already exited
+        pass
