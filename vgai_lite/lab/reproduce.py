@@ -15,7 +15,7 @@ controllers trained at the defaults (v_init = 3, R = 1.5), flown in each conditi
 with ``--extras``, the row "VGAI (retrained)" of Table 2b does the same for VGAI (two more trainings).
 The row "DAGNN (per neighbour)" of Tables 2b and 3 (not the paper's) is one DAGNN trained at the defaults
 with each feature divided by the drone's degree (``runs.PER_NEIGHBOUR``, notebook 03 section 9), flown in
-every column: the controller for every team and radius.
+every column: one controller for every team size.
 
 Every cell of a column is evaluated on the same initial conditions, the book's test episodes (seed
 ``book.TEST_SEED``: nothing is chosen on them), so controllers are compared episode by episode. A cell is one

@@ -42,11 +42,12 @@ DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
     "dagnn_K4_mean": DAGNNTrainConfig(gso="row_normalized"), # GSO comparison (notebook 03)
     "dagnn_K4_sum": DAGNNTrainConfig(gso="adjacency"),
     "dagnn_K4_signed_log": DAGNNTrainConfig(feature_transform="signed_log"),
-    "dagnn_K4_per_neighbour": DAGNNTrainConfig(feature_transform=PER_NEIGHBOUR),  # Tables 2b and 3's extra row
+    "dagnn_K4_per_neighbour": DAGNNTrainConfig(feature_transform=PER_NEIGHBOUR),  # the row "DAGNN (per neighbour)" of Tables 2b and 3
 }
 """The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name. ``dagnn_K4`` is the paper's
 (eq. 4's sums); ``dagnn_K4_per_neighbour`` divides each sum by the drone's degree (notebook 03, section 9),
-the DAGNN that flies every team and radius of Tables 2b and 3 (their row "DAGNN (per neighbour)")."""
+the one DAGNN that flies every column of Tables 2b and 3 (their row "DAGNN (per neighbour)"); it flocks at every
+N' up to 200, not at R = 1 m."""
 
 VGAI_SEEDS = 3
 """Training seeds of the default VGAI the book ships (``train-vgai --seeds``; how long each took is in
