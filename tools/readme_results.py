@@ -126,7 +126,7 @@ def section() -> str:
           f"`python -m vgai_lite train-vgai vgai_{n}` |"
           for n, label, paper in (("K2", "K-1 = 1", p['K']['VGAI'][1]), ("K3", "K-1 = 2", p['K']['VGAI'][2]),
                                   ("F6", "F = 6", p['F']['VGAI'][6]), ("F12", "F = 12", p['F']['VGAI'][12]))],
-        f"| DAGNN, K-1 = 3, features per neighbour (eq. 4's sums divided by the degree; not the paper's) | "
+        f"| DAGNN, K-1 = 3, features per neighbour (the local features' sums divided by the degree; not the paper's) | "
         f"{_ci(pn_rec)} | - | {_flock(pn_rec)} | {_episodes(pn_rec)} | "
         "`python -m vgai_lite train-dagnn dagnn_K4_per_neighbour` |",
     ]
@@ -182,7 +182,7 @@ def _per_neighbour_cells(results: dict) -> str:
     return (f" Table 3's VGAI at N' = 75 (trained on 50): {n75['relative_cost_mean']:.2f} ({lo75:.2f}-{hi75:.2f}), the "
             f"paper's {PAPER['N']['VGAI'][75]:.2f}, variance at 5 s {n75['velocity_variance_median']['5s']:.1e} m²/s², "
             f"connected at 5 s in {n75['share_connected_at_end']:.0%}, " + ("flocked" if flocked(n75) else "not flocked") + "."
-            f" The row *DAGNN (per neighbour)* of Tables 2b and 3 (the paper's DAGNN with eq. 4's sums divided by each "
+            f" The row *DAGNN (per neighbour)* of Tables 2b and 3 (the paper's DAGNN with the local features' sums divided by each "
             f"drone's degree, trained at N = 50 and R = 1.5 m, {seeds} training seeds): at N' = 200 "
             f"{cell('N', 'DAGNN (per neighbour)', '200')}, against the paper's DAGNN's {cell('N', 'DAGNN', '200')}; at R = 1 m "
             f"{cell('R', 'DAGNN (per neighbour)', '1.0')}, against {cell('R', 'DAGNN', '1.0')}.")

@@ -89,7 +89,7 @@ class VGAITrainConfig:
             (``per_team``): every step sees about as many drone images. Empty (the paper's): every swarm
             flies the training's configuration; the authors' released code draws R per sample.
         feature_means: the local features the CNN learns to read (stage 1, and stage 3's state-estimation
-            loss) are eq. 4's sums divided by the number of neighbours (``local_features(per_neighbour=True)``):
+            loss) are the local features' sums divided by the number of neighbours (``local_features(per_neighbour=True)``):
             means, which do not grow with the team's density (False: the sums, the DAGNN's).
     """
 
@@ -210,8 +210,8 @@ BOOK_SENSOR = {"vision": VisionConfig(), "warm_starts": True}
 warm starts (stage 1's state estimation, stage 2's MLP fit): the departures every book VGAI makes."""
 
 BOOK_CAMERA = CameraRanges((0.0, 0.05), (0.0, 1.4), (0.9, 1.1), (-0.03, 0.03), dead_share=0.05, depth_noise=(0.0, 0.05))
-"""The camera the book's VGAI is trained through: ranges just past the paper's own test (noise 10/255, blur
-about 0.5 degrees), chosen over wider ones on the validation episodes (notebook 08, ``runs.CAMERA_RUNS``)."""
+"""The camera the book's VGAI is trained through: ranges just past the perturbations of the authors'
+released test script (``inference_by_dronet.py`` of VITA-Group/VGAI, not the paper: noise 10/255, a 5 x 5 blur, about 0.5 degrees), chosen over wider ones on the validation episodes (notebook 08, ``runs.CAMERA_RUNS``)."""
 
 BOOK_RECIPE = {**BOOK_SENSOR, "motion_features": None, "synthetic_share": 0.5, "aux_weight": 5.0,
                "learner_swarms": 0.5, "camera": BOOK_CAMERA}

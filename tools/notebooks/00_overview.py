@@ -87,7 +87,7 @@ paper_vs_book.show()
 # | [**03** aggregation GNN](03_aggregation_gnn.ipynb) | a controller trained by imitation (DAgger) on exact local features: the paper's DAGNN baseline | §3.2, eqs. 7-10 |
 # | [**04** rendered observations](04_rendered_observations.ipynb) | what a drone sees: top-down and 360° egocentric images from our own renderer, checked against a pymunk ray caster; 3-D views | Fig. 4 |
 # | [**05** the visual CNN](05_visual_state_cnn.ipynb) | residual blocks, vertical-only pooling, $F$ features, visual state estimation | §3.3, Fig. 2 |
-# | [**06** VGAI](06_vgai_joint_training.ipynb) | CNN and DAGNN trained jointly, K-step backpropagation through time, evaluated on the test episodes | §3.4, Fig. 3 |
+# | [**06** VGAI](06_vgai_joint_training.ipynb) | CNN and DAGNN trained jointly, K-step backpropagation through time, evaluated on the test episodes | §3.3-3.4, Fig. 3 |
 # | [**07** experiments](07_experiments.ipynb) | the paper's tables regenerated, the paper's numbers beside ours | §4 |
 # | [**08** robustness](08_robustness.ipynb) | no silent NaN; noisy and dead cameras, lost and late messages, larger teams; the camera VGAI is trained through | §4 and beyond |
 # | [**09** results at a glance](09_results_at_a_glance.ipynb) | every controller on the test episodes; a fair comparison with the paper; what is still open | §4-5 |

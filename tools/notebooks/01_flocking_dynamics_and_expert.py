@@ -48,9 +48,9 @@ print("quick mode" if QUICK else "full mode")
 # ## 1. The constants
 #
 # `FlockConfig` holds the problem. The paper fixes $N = 50$, $R = 1.5$ m, $T_s = 0.01$ s,
-# $v_{init} = 3$ m/s and the $\pm 30$ m/s² saturation. It is silent on three things the book had to
-# choose, each explained below: the potential's radius $\rho$, the episode length $T$, and the
-# initial disc (the text and the reference code disagree).
+# $v_{init} = 3$ m/s and the $\pm 30$ m/s² saturation. It is silent on two things the book had to
+# choose, the potential's radius $\rho$ and the episode length $T$, and its text and the reference
+# code disagree on a third, the initial disc; each is explained below.
 
 # %%
 # NBVAL_CHECK_OUTPUT
@@ -172,8 +172,8 @@ plt.show()
 #
 # It ignores positions entirely: a swarm can score well while two drones touch. The paper reports
 # every controller's cost **relative to the centralized expert's** on the same initial conditions
-# (expert = 1.00). We report the mean of costs over the mean of the expert's costs (the paper's
-# number), the median of per-episode ratios, and a bootstrap 95 % interval.
+# (expert = 1.00). We report the mean of costs over the mean of the expert's costs (the number we
+# set beside the paper's; the paper does not say how it averages), the median of per-episode ratios, and a bootstrap 95 % interval.
 #
 # **Episode length.** The paper does not give $T$. We use $T = 200$ steps (2 s): by then the
 # expert has flocked and its action is zero, so a longer episode adds only the learner's residual
@@ -215,7 +215,7 @@ prose("A controller **flocked** when, over the episodes it flew, the median velo
 #   swarm's mean velocity. That is why the expert is **centralized**.
 # * As printed, $U$ decreases all the way to $\rho$: it is **purely repulsive**. The public reference
 #   code uses $1/\|r\|^2 + \log\|r\|^2$, which repels below 1 m and would *attract* between 1 m and
-#   $\rho$. We follow the paper (`potential="paper"`) and keep the code's version as an option.
+#   $\rho$ (were $\rho$ above 1 m). We follow the paper (`potential="paper"`) and keep the code's version as an option.
 # * **$\rho$** is not given. We use **0.5 m**: with it the local heuristic's relative cost lands
 #   near the paper's 4.13 (section 8 below measures the alternatives). Note the potential's value
 #   jumps by nothing at $\rho$ but its gradient does: the push drops from about 20 m/s² to 0.
@@ -391,7 +391,7 @@ for name, traj in trajs.items():
 # the median over the episodes of each episode's closest approach and the share of episodes with a
 # pair closer than 0.05 m: bodies half into each other, a crash rather than a graze. The share
 # below 0.1 m (contact) is in every record too, and shown where a table has room. Since even the
-# expert comes close in some episodes (closer than 0.1 m in some of the episodes below, closer than
+# expert comes close in some episodes (closer than 0.1 m in some of the episodes above, closer than
 # 0.05 m in some of notebook 06's test episodes; its closest approaches are set by the initial
 # conditions, below), a controller is called **as safe as the expert** when its share below 0.05 m
 # is at most the expert's plus 4 points (or 5%, whichever is larger) and its median closest approach
@@ -419,7 +419,7 @@ display(Markdown("| rho [m] | expert cost | Local cost | Local / Centralized | L
                  "|---|---|---|---|---|\n" + "\n".join(rows)))
 
 # %% [markdown]
-# The expert barely notices $\rho$; the local heuristic does. A wider repulsion pushes neighbours
+# The expert's cost rises with $\rho$, the local heuristic's far more (the table above). A wider repulsion pushes neighbours
 # apart before they have aligned, links break, and agents that lose all neighbours keep their
 # velocity for good: the local swarm disintegrates and its cost explodes. $\rho$ = 0.5 m puts the
 # Local ratio near the paper's 4.13, so we take it as the default (`FlockConfig.rho`).
@@ -490,7 +490,7 @@ prose("""## What we have, and what comes next
 #
 # ## References
 #
-# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 2: the flocking problem, eq. 1's cost.
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): §3.1: the flocking problem, eq. 1's cost.
 # * Tolstaya, Gama, Paulos, Pappas, Kumar, Ribeiro. *Learning Decentralized Controllers for Robot Swarms with Graph Neural Networks.* CoRL 2019 ([arXiv:1903.10527](https://arxiv.org/abs/1903.10527)): the expert controller and its potential (eqs. 2-3).
 
 # %% [markdown]

@@ -75,10 +75,10 @@ plt.show()
 #
 # The paper does not say which GSO its DAGNN uses; the public reference code averages
 # (`row_normalized`, "mean pooling"). **Our default is `sym_normalized`**, chosen by measurement in
-# notebook 03 (section 9, on validation episodes): at the training size $N = 50$ the three cannot be
-# told apart; summing (`adjacency`) lets the aggregated features grow with the number of neighbours,
-# and in a denser team of $N' = 100$ its cost rises above the others'; no GSO costs less than the
-# symmetric normalisation at any team size. The normalised operators keep repeated shifts $\mathbf S^k\mathbf X$ bounded
+# notebook 03 (section 9, on validation episodes, where the verdicts are computed): summing
+# (`adjacency`) lets the aggregated features grow with the number of neighbours, which matters in
+# the denser teams of larger $N'$, and no other GSO costs less than the symmetric normalisation
+# there. The normalised operators keep repeated shifts $\mathbf S^k\mathbf X$ bounded
 # (spectrum in $[-1, 1]$); the plain adjacency does not. (`spectral_normalized` is as stable, but
 # $\lambda_{max}$ is a property of the whole graph: no drone can compute it locally.)
 
@@ -200,8 +200,8 @@ plt.tight_layout()
 plt.show()
 
 # %% [markdown]
-# The locality is a property of the construction, not of a trained network: every test in
-# `tests/test_graphs_aggregation.py` checks it, including a simulation in which each agent keeps
+# The locality is a property of the construction, not of a trained network: the tests in
+# `tests/test_graphs_aggregation.py` check it, including a simulation in which each agent keeps
 # *only* the messages it received and still reproduces $\mathbf Z(t)$ exactly.
 #
 # **What it costs.** Each agent transmits $(K-1)\cdot F$ numbers per step. In float32:

@@ -238,7 +238,8 @@ prose("In these {E} episodes the expert brings a pair closer than {d:g} m in {k}
       E=E, d=d, k=touching["Centralized"], c=with_contact["Centralized"],
       verdict=("They differ for some controller: pymunk resolves a contact inside a step, while the simulator "
                "reads distances at the sampling instants only." if not agree else
-               "The two agree for every controller: no pair's bodies touch in these episodes."
+               "The two agree for every controller; under the expert no pair's bodies touch in these episodes "
+               "(the table above counts the others' contacts)."
                if touching["Centralized"] == 0 else
                "The two agree for every controller: these are real contacts, which notebook 01 counts among "
                "its close calls."))
@@ -343,7 +344,7 @@ assert check_pinhole(my_pinhole)
 # %% [markdown]
 # ## References
 #
-# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): section 4: the drones' four cameras.
+# * Hu, Gama, Chen, Wang, Ribeiro, Sadler. *VGAI: End-to-End Learning of Vision-Based Decentralized Controllers for Robot Swarms.* ICASSP 2021 ([arXiv:2002.02308](https://arxiv.org/abs/2002.02308)): Fig. 4 (the drones' four cameras, in the implementation details of §3.4).
 # * pymunk, a 2D physics library ([pymunk.org](https://www.pymunk.org)): the reference physics and ray caster.
 
 # %% [markdown]

@@ -87,7 +87,7 @@ plt.show()
 # \qquad \mathbf n \sim \mathcal N(0, 1) \text{ per pixel and frame},$$
 #
 # with $G_b$ a Gaussian blur of $b$ degrees of view (so that a setting means the same at every
-# resolution: a column here is 90°/32 = 2.8° wide, a row 5° tall), $a$ and $c$ the exposure's gain
+# resolution: a column here is 90°/32 = 2.8° wide on average, a row 5° tall), $a$ and $c$ the exposure's gain
 # and offset, and a dead camera showing 0 on its quarter of the panorama. Exposure and sensor noise
 # are photometric: they act on the gray channel. The book's depth channel $D = 0.2/d$ would come
 # from a range sensor, whose error is a share $\varepsilon$ of the distance it measures:
@@ -196,7 +196,8 @@ if QUICK:
 estimators = {"two frames (g = 5)": book_estimator("estimator_motion", progress=False),
               "single frame": book_estimator("estimator_single", progress=False)}
 for name, (_, _, meta) in estimators.items():
-    print(f"{name}: trained in {meta['seconds']:.0f} s")
+    print(f"{name}: {meta['steps']} gradient steps in {meta['seconds'] / 60:.0f} min, on cores it may have shared (its "
+          "record does not say; notebook 06 times the recipe's stage 1 alone)")
 
 # %% [markdown]
 # The two-frame estimator is exactly stage 1 of the VGAI with the paper's CNN, action loss and DAgger
@@ -208,8 +209,7 @@ for name, (_, _, meta) in estimators.items():
 
 # %% [markdown]
 # How well does each estimate each feature? Correlation with the exact features on held-out expert
-# flights, at a few time steps (at $t = 2$ the "earlier" frame is only 2 steps old: an episode's first
-# frames carry little motion):
+# flights, at a few time steps:
 
 # %%
 rows = []
@@ -228,8 +228,8 @@ display(Markdown("| estimator | step t | " + " | ".join(FEATURE_NAMES) + " |\n|-
 # start of an episode, exactly when the expert acts hardest and most of eq. 1 accrues. With two frames
 # the motion of every neighbour is in the image from the first step (the frames before $t = 0$ are
 # drawn from the initial state flown backwards, `VisionConfig.prehistory`), and the velocity features
-# are estimated from the start. Late in an episode, when the swarm has flocked, relative velocities are
-# tiny and hard to see in either case; they add little to eq. 1 then, but whether the swarm *stays*
+# are estimated from the start. Later, as the swarm settles (and once it has flocked), relative
+# velocities become tiny and hard to see in either case; they add little to eq. 1 then, but whether the swarm *stays*
 # flocked depends on them (notebook 11).
 
 # %%
@@ -361,7 +361,7 @@ assert check_circular_conv(MyCircularConv)
 # estimators are trained the same short way (a few hundred steps, from the same seed), one with the
 # book's zero padding and one whose column convolutions are your `MyCircularConv`, and each is scored
 # on held-out expert flights: its correlation with the exact features and how far it is from that
-# symmetry. Try more steps, the quarter turn (a roll by one camera, with x and y swapped), or the
+# symmetry. Try more steps, the quarter turn (a roll by one camera, with x and y swapped and one of them negated), or the
 # default VGAI's recipe; then decide whether the book should switch.
 
 # %%

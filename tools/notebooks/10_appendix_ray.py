@@ -47,7 +47,9 @@ results = load_results()  # the committed full run: data/results/results.json
 # of the work spread evenly over the machines and the longest chain that must run in order (the three
 # VGAIs of Table 1b that share a first stage, then the slowest cell); it ignores Ray's own overhead
 # and assumes every machine is this one. Each training's time is the one its record holds (how it ran
-# is in the record's provenance), so the projection is as good as those records.
+# is in the record's provenance, and most VGAI trainings shared the two cores with another job, which
+# makes them slower than alone: notebook 06 times the recipe alone), so the projection is an upper
+# bound, as good as those records.
 
 # %%
 from vgai_lite.lab.ray_runner import projected_hours
@@ -71,7 +73,7 @@ proj = [projected_hours(results, DATA_DIR / "results", m) for m in machines]
 display(Markdown("| machines (2 cores each) | projected hours, 3 training seeds per VGAI row | speed-up |\n|---|---|---|\n" +
                  "\n".join(f"| {p['machines']} | {p['projected_hours']:.1f} | {proj[0]['projected_hours'] / p['projected_hours']:.1f}× |"
                             for p in proj)))
-prose("Past about {knee} machines the projection stops falling: the longest chain, {chain:.1f} h (the three "
+prose("From {knee} machines on (of those tried) the projection stops falling: the longest chain, {chain:.1f} h (the three "
       "VGAIs of Table 1b, one after the other, then the slowest cell), bounds it. The same run on one machine "
       "is {one:.1f} h of work.",
       knee=next((p["machines"] for p in proj if p["projected_hours"] <= p["longest_chain_hours"] + 1e-9), machines[-1]),

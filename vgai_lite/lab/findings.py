@@ -2,7 +2,10 @@
 
 Introduced in notebook 03 (its first use); notebook 07 checks the paper's findings with it. A relative cost comes
 with an interval: its bootstrap 95 % interval over episodes, or, for a row averaged over several
-training seeds, mean ± 1.96 × (spread over seeds) / √seeds. Then:
+training seeds, mean ± 1.96 × (spread over seeds) / √seeds. A cell flown by ONE training of a VGAI
+configuration (``one_training``) also carries the spread between that configuration's training seeds:
+its interval reaches mean ± √(episode half-width² + (1.96 × seed spread)²), so two single trainings
+differ only when they differ by more than the seeds do. Then:
 
   a < b   when a's interval lies entirely below b's (the two do not overlap)
   a trend ("falls as F grows") holds when every step of the series is such a difference in the
@@ -23,12 +26,42 @@ from ..evaluate import FLOCKED_CONNECTED, flocked
 HOLDS, CONTRADICTED, CANNOT_TELL = "yes", "no", "cannot tell"
 
 
+SEED_SPREAD_KEY = "one_training_seed_std"
+"""The key ``one_training`` adds to a cell: the spread (std) of the cost between training seeds of its configuration."""
+
+
+def seed_spread(records: Sequence[dict]) -> float:
+    """The spread between training seeds of one configuration: the standard deviation (n - 1) of their
+    relative costs (records with ``relative_cost_mean``, at least two, on the same episodes)."""
+    costs = [float(r["relative_cost_mean"]) for r in records]
+    if len(costs) < 2:
+        raise ValueError(f"a spread between training seeds needs at least two trainings, got {len(costs)}")
+    mean = sum(costs) / len(costs)
+    return math.sqrt(sum((c - mean) ** 2 for c in costs) / (len(costs) - 1))
+
+
+def one_training(cell: dict, seed_std: float) -> dict:
+    """``cell`` (a relative cost with its interval over episodes) flown by one training of a configuration whose
+    trainings spread by ``seed_std`` (``seed_spread``): a copy whose ``interval`` also holds that spread."""
+    if not seed_std >= 0 or math.isinf(seed_std):
+        raise ValueError(f"seed_std must be a finite spread >= 0, got {seed_std!r}")
+    if cell.get("per_seed") and len(cell["per_seed"]) > 1:
+        raise ValueError("one_training: this cell is already a mean over several training seeds")
+    return {**cell, SEED_SPREAD_KEY: float(seed_std)}
+
+
 def interval(cell: dict) -> tuple[float, float]:
     """(low, high) of a relative cost: a record with ``relative_cost_mean_ci95`` (one evaluation) or
-    ``ci95``, else a table cell over training seeds (``per_seed`` with ``seed_std``)."""
+    ``ci95``, widened by the spread between training seeds where ``one_training`` marked it, else a table
+    cell over training seeds (``per_seed`` with ``seed_std``)."""
     ci = cell.get("relative_cost_mean_ci95") or cell.get("ci95")
     if ci:
-        return float(ci[0]), float(ci[1])
+        lo, hi = float(ci[0]), float(ci[1])
+        s = 1.96 * float(cell.get(SEED_SPREAD_KEY, 0.0))
+        if s:
+            m = float(cell["relative_cost_mean"])
+            lo, hi = m - math.hypot(m - lo, s), m + math.hypot(hi - m, s)
+        return lo, hi
     seeds, std = cell.get("per_seed") or [], cell.get("seed_std")
     if len(seeds) > 1 and std is not None:
         mean, half = float(cell["relative_cost_mean"]), 1.96 * float(std) / math.sqrt(len(seeds))
@@ -89,30 +122,70 @@ def series_text(cells: Sequence[dict], labels: Sequence) -> str:
                       for lab, c in zip(labels, cells))
 
 
-def needs(without: dict) -> str:
+def flock_verdict(record: dict, seeds: Sequence[dict]) -> int:
+    """Whether one training flocks, judged against ``seeds``, the records of the trainings of a configuration it is
+    compared with (on the same episodes): -1 when it flocks (``evaluate.flocked``) with a velocity variance at 5 s
+    below every seed's, +1 when it does not flock and ends beyond every seed (variance at 5 s above the largest of
+    theirs, or connected in fewer episodes than the least of theirs), 0 when it lies within their spread: one
+    draw, which cannot tell a configuration that flocks from one that does not."""
+    if len(seeds) < 2:
+        raise ValueError(f"a flock verdict needs at least two trainings to judge against, got {len(seeds)}")
+    late = [r["velocity_variance_median"]["5s"] for r in seeds]
+    var = record["velocity_variance_median"]["5s"]
+    if flocked(record) and var < min(late):
+        return -1
+    if not flocked(record) and (var > max(late) or record["share_connected_at_end"]
+                                < min(r["share_connected_at_end"] for r in seeds)):
+        return 1
+    return 0
+
+
+def needs(without: dict, seeds: Sequence[dict]) -> str:
     """The book's one sentence on what makes VGAI flock, from the leave-one-out records
-    (``runs.LEAVE_ONE_OUT``: departure -> the record of the recipe without it): which departures the
-    flock needs (without each, it does not flock by ``evaluate.flocked``) and which it does not, each
-    with its velocity variance at 5 s (and its share connected at 5 s where that is what fails)."""
+    (``runs.LEAVE_ONE_OUT``: departure -> the record of the recipe without it, one training each) judged
+    against ``seeds``, the records of the recipe's own trainings on the same episodes. A departure is
+    needed when the recipe without it does not flock (``evaluate.flocked``) and ends beyond every one of
+    the recipe's training seeds: its velocity variance at 5 s above the largest of theirs, or connected
+    in fewer episodes than the least of theirs. A row that does not flock within that spread cannot be
+    told from the recipe, which itself does not flock in every seed. Each with its variance at 5 s (and
+    its share connected at 5 s where that is what fails)."""
     if not without:
         raise ValueError("needs() takes at least one leave-one-out record")
+    if len(seeds) < 2:
+        raise ValueError(f"needs() judges against at least two trainings of the recipe, got {len(seeds)}")
+
     def listed(xs):
         return xs[0] if len(xs) == 1 else ", ".join(xs[:-1]) + " or " + xs[-1]
+
+    def late(rec):
+        return rec["velocity_variance_median"]["5s"]
 
     def shown(d):
         rec = without[d]
         cut = rec["share_connected_at_end"] < FLOCKED_CONNECTED
-        return (f"{d} ({rec['velocity_variance_median']['5s']:.1e} m²/s²"
+        return (f"{d} ({late(rec):.1e} m²/s²"
                 + (f", connected in {rec['share_connected_at_end']:.0%}" if cut else "") + ")")
 
-    needed = [shown(d) for d, rec in without.items() if not flocked(rec)]
+    worst_var = max(map(late, seeds))
+
+    def beyond(rec):
+        return flock_verdict(rec, seeds) == 1
+
     spare = [shown(d) for d, rec in without.items() if flocked(rec)]
-    if not spare:
-        return (f"VGAI flocks only with every departure from the paper that the book left out in turn: without "
-                f"any one of them ({listed(needed)}) it does not flock.")
-    if not needed:
-        return f"VGAI still flocks without any one of the departures the book left out in turn ({', '.join(spare)})."
-    return f"VGAI still flocks without {listed(spare)}; it does not flock without {listed(needed)}."
+    needed = [shown(d) for d, rec in without.items() if not flocked(rec) and beyond(rec)]
+    within = [shown(d) for d, rec in without.items() if not flocked(rec) and not beyond(rec)]
+    parts = []
+    if spare:
+        parts.append(f"VGAI still flocks without {listed(spare)}")
+    if needed:
+        parts.append(("it" if parts else "VGAI") + f" does not flock, beyond the spread of the recipe's own trainings, "
+                     f"without {listed(needed)}")
+    if within:
+        parts.append(f"without {listed(within)} it does not flock in its one training, but within that spread, "
+                     "so that cannot be told")
+    return ("; ".join(parts) + f". The recipe's own {len(seeds)} training seeds end between "
+            f"{min(map(late, seeds)):.1e} and {worst_var:.1e} m²/s² at 5 s ({sum(map(flocked, seeds))} of {len(seeds)} "
+            "flock).")
 
 
 def steps_text(cells: Sequence[dict], labels: Sequence) -> str:

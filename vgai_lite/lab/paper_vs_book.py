@@ -29,13 +29,14 @@ def _rows() -> dict:
             "our own batched renderer for the images, checked against a pymunk ray caster",
             "a laptop CPU instead of a game engine; notebook 04"),
         "observation": (
-            "four AirSim RGB cameras (front-centre, front-left, front-right, back), 144 × 256 each, "
+            "four AirSim camera views (front-centre, front-left, front-right, back), 144 × 256 each (colour in the "
+            "authors' code; the paper does not say), "
             "concatenated; one frame per step",
             f"four 90° pinhole cameras ({', '.join(CAMERAS)}) of {rc.view_height} × {rc.view_width}, "
             f"a {rc.view_height} × {rc.panorama_width} panorama with channels {' and '.join(rc.channels)}",
             "drones are discs on the horizon: few rows suffice, and depth gives distance; notebooks 04-05"),
         "depth": (
-            "none: RGB cameras, distances only from how large and where a drone appears",
+            "none stated: camera images, distances only from how large and where a drone appears",
             ("a depth channel beside the gray one, so distances are read, not inferred"
              if "depth" in rc.channels else "none: the gray channel only, as the paper's cameras"),
             "a help the paper's drones lack; notebook 11 trains the book's best recipe with gray only and "
@@ -61,7 +62,7 @@ def _rows() -> dict:
             f"{tv.camera.noise[1]:g}, blur up to {tv.camera.blur_deg[1]:g}°, exposure, a dead camera; notebook 08)",
             "the book's additions: notebook 11's leave-one-out says which of them the book's recipe needs to "
             "flock; the paper's VGAI fails first for its sensor (one gray frame: warm starts alone do not rescue it, "
-            "notebook 11's square); notebooks 05, 06 and 11"),
+            "notebook 11, section 3: sensor × warm starts); notebooks 05, 06 and 11"),
         "GSO": (
             "S(t) respects the graph's sparsity (adjacency, Laplacian or normalisations cited); which one "
             "is not said (the public reference code averages)",

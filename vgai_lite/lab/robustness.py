@@ -46,7 +46,7 @@ APPLIES_TO = {"links": ("DAGNN", "VGAI"), "delay": ("DAGNN", "VGAI"), "image_noi
 
 
 TARGETS = {"links_p": 0.2, "connected": 0.9, "image_noise_sigma": 0.05, "image_noise_ratio": 1.2}
-"""What VGAI should survive, set before the sweep was flown: with a share ``links_p`` of its
+"""What VGAI should survive (criteria of the book, not of the paper): with a share ``links_p`` of its
 messages lost, a cost below the Local heuristic's and the swarm connected at the end in at least
 ``connected`` of episodes; with pixel noise ``image_noise_sigma``, a cost at most ``image_noise_ratio``
 times its clean cost."""

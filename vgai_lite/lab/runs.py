@@ -45,7 +45,7 @@ DAGNN_RUNS: dict[str, DAGNNTrainConfig] = {
     "dagnn_K4_per_neighbour": DAGNNTrainConfig(feature_transform=PER_NEIGHBOUR),  # the row "DAGNN (per neighbour)" of Tables 2b and 3
 }
 """The DAGNNs the book ships in data/dagnn/ (FlockConfig() defaults), by name. ``dagnn_K4`` is the paper's
-(eq. 4's sums); ``dagnn_K4_per_neighbour`` divides each sum by the drone's degree (notebook 03, section 9),
+(the local features' sums); ``dagnn_K4_per_neighbour`` divides each sum by the drone's degree (notebook 03, section 9),
 the one DAGNN that flies every column of Tables 2b and 3 (their row "DAGNN (per neighbour)"); it flocks at every
 N' up to 200, not at R = 1 m."""
 
@@ -88,6 +88,17 @@ CAMERA_SEED_RUNS: tuple = ("vgai_depthcam", "vgai_depthcam_seed1", "vgai_depthca
 seeds 0-2 copied to data/vgai/seeds/vgai_F24_seedS when the camera became the book's, the pool its
 vgai_F24 was chosen from; seed 3 trained later, alone, to time the recipe): the recipe's record over
 seeds, its camera evaluations on the validation episodes, NAME_cameras.json (notebook 08)."""
+
+def seed_records(names: tuple = CAMERA_SEED_RUNS, folder: Optional[Path] = None) -> list[dict]:
+    """The records of every training of one VGAI configuration (default: the book's recipe, CAMERA_SEED_RUNS),
+    data/experiments/NAME.json, all on the same validation episodes: the spread between training seeds that
+    ``findings.seed_spread`` measures and every single-training VGAI cell is judged with (``findings.one_training``)."""
+    folder = DATA_DIR / "experiments" if folder is None else Path(folder)
+    recs = [json.loads((folder / f"{n}.json").read_text()) for n in names]
+    if len({(r["seed"], r["episodes"]) for r in recs}) != 1:
+        raise ValueError(f"seed_records: {names} were not flown on the same episodes")
+    return recs
+
 
 CLEAN_SEED_RUNS: tuple = ("vgai_clean_seed0", "vgai_clean_seed1", "vgai_clean_seed2")
 """The book's recipe on clean frames (``BOOK_RECIPE`` without ``BOOK_CAMERA``; the book's VGAI until the
