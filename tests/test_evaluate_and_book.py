@@ -359,3 +359,15 @@ def test_one_trainings_flock_is_told_only_beyond_the_spread_of_the_seeds_it_is_j
     assert findings.flock_verdict(rec(FLOCKED_VARIANCE / 4, FLOCKED_CONNECTED / 2), seeds) == 1  # its swarm splits
     with pytest.raises(ValueError):
         findings.flock_verdict(rec(1.0), seeds[:1])
+
+
+def test_a_trend_reversed_end_to_end_is_contradicted_even_when_every_step_is_within_its_intervals():
+    from vgai_lite.lab import findings
+
+    def c(m, h):
+        return {"relative_cost_mean": m, "relative_cost_mean_ci95": [m - h, m + h]}
+
+    falling = [c(5.6, 0.3), c(5.1, 0.4), c(4.4, 0.4)]  # each step within the intervals, the ends apart
+    assert findings.trend(falling, 1) == findings.CONTRADICTED   # "rises" is contradicted end to end
+    assert findings.trend(falling, -1) == findings.CANNOT_TELL   # "falls" holds at no single step
+    assert findings.steps_text(falling, [1, 2, 3]).endswith("1 → 3 lower")

@@ -154,3 +154,15 @@ def test_provenance_samples_the_load_and_needs_a_command():
     assert rec["load_average_max"] >= rec["load_average_mean"] >= 0 and rec["episodes_seed"] == 1
     with pytest.raises(RuntimeError):
         Provenance("x").record()
+
+
+def test_every_committed_table_cell_names_a_checkpoint_the_repository_holds():
+    """A cell's checkpoint is a file of this repository (a timed run's temporary copies are relinked when adopted)."""
+    from vgai_lite.book import DATA_DIR
+
+    missing = []
+    for path in sorted((DATA_DIR / "results" / "cells").glob("*.json")):
+        ck = json.loads(path.read_text()).get("checkpoint")
+        if ck is not None and (Path(ck).is_absolute() or not (DATA_DIR.parent / ck).exists()):
+            missing.append((path.name, ck))
+    assert not missing, f"cells whose checkpoint is not a repository file: {missing[:5]}"

@@ -49,6 +49,23 @@ def name_the_command(path: Path, command: str) -> None:
     path.write_text(json.dumps(results, indent=1) + "\n")
 
 
+def relink(cells_dir: Path) -> int:
+    """Point every cell's checkpoint that lay in a timed run's temporary models folder (``.../vgai_reproduce_*/models/NAME``,
+    a copy of data/results/models) at the repository's own copy, data/results/models/NAME; returns how many it changed."""
+    changed = 0
+    for path in sorted(Path(cells_dir).glob("*.json")):
+        cell = json.loads(path.read_text())
+        ck = cell.get("checkpoint")
+        if ck and "vgai_reproduce_" in ck and Path(ck).parent.name == "models":
+            ours = DATA_DIR / "results" / "models" / Path(ck).name
+            if not ours.exists():
+                raise SystemExit(f"{path.name}: its checkpoint {Path(ck).name} is not in data/results/models")
+            cell["checkpoint"] = str(ours.relative_to(DATA_DIR.parent))
+            path.write_text(json.dumps(cell, indent=1) + "\n")  # as table_cells writes it
+            changed += 1
+    return changed
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--threads", type=int, default=2)
@@ -56,7 +73,12 @@ def main(argv=None) -> int:
     p.add_argument("--out", default=str(DATA_DIR / "results" / "timed_run.json"))
     p.add_argument("--adopt", action="store_true",
                    help="make this run the book's tables: replace data/results/cells, results.json and results.csv by its own")
+    p.add_argument("--relink", action="store_true",
+                   help="no run: point the committed cells' checkpoints at data/results/models (runs adopted before relink)")
     args = p.parse_args(argv)
+    if args.relink:
+        print(f"relinked {relink(DATA_DIR / 'results' / 'cells')} cells to data/results/models")
+        return 0
     torch.set_num_threads(args.threads)
     committed = json.loads((DATA_DIR / "results" / "results.json").read_text())
     rc = ReproduceConfig(**{k: v for k, v in committed["provenance"]["reproduce_config"].items()
@@ -95,6 +117,7 @@ def main(argv=None) -> int:
         results_dir = DATA_DIR / "results"
         shutil.rmtree(results_dir / "cells")
         shutil.copytree(work / "cells", results_dir / "cells")
+        relink(results_dir / "cells")  # the repository's checkpoints, not the temporary copies
         for name in ("results.json", "results.csv"):
             shutil.copy2(work / name, results_dir / name)
         name_the_command(results_dir / "results.json", command)

@@ -275,12 +275,13 @@ print(inspect.getsource(controllers.local_control).split('"""')[-1])
 # | training | a run's own seed (its per-round checks at a fixed offset from it) | what a controller learns from |
 # | **validation** | `VALIDATION_SEED` | every choice: a design, a recipe, a hyperparameter ($\rho$ below), which of several training seeds to ship |
 # | **test** | `TEST_SEED` | only the numbers the book reports for the controllers it ships; nothing is chosen on them |
-# | working | `WORKING_SEED` | the chapters' pictures and worked experiments (this chapter's tables, notebook 03's comparisons, the shipped DAGNNs' own records) |
+# | working | `WORKING_SEED` | the chapters' pictures and worked experiments (this chapter's pictures and section 8's costs, notebook 03's worked examples, the shipped DAGNNs' own records) |
 #
 # Why: a choice made on the episodes that are then reported flatters the choice (with enough
 # variants, one looks good on those episodes by luck). The **working episodes** are held out from
 # training too, but the chapters compare designs on them while they teach, so they are not a test:
-# this chapter's pictures and tables use them, and the headline figures of the shipped controllers
+# this chapter's pictures and section 8's costs use them (its choice of ρ is made on the validation
+# episodes), and the headline figures of the shipped controllers
 # are flown on the test episodes (their records in `data/` say which seed each number came from).
 
 # %%
@@ -485,8 +486,8 @@ prose("""## What we have, and what comes next
 # [Notebook 02](02_graph_shift_operators.ipynb) introduces the communication graph and the **delayed aggregation sequence** that lets
 # an agent hear, with delay, from agents several hops away. Notebook 03 measures what it buys: a
 # learned controller on the same local features without any exchange already closes much of the
-# gap between Local and the expert (learning a better local rule); the first exchange closes part
-# of the rest, and notebook 03 says, by its intervals, what the further ones add.
+# gap between Local and the expert (learning a better local rule), and notebook 03 says, by its
+# intervals and the spread between training seeds, what each exchange adds.
 #
 # ## References
 #

@@ -96,7 +96,16 @@ assert prov["reproduce_config"]["seed"] == TEST_SEED, "the tables are reported o
 #   settings above say whether this run has it).
 
 # %%
-SEED_STD = findings.seed_spread(seed_records())  # between the recipe's training seeds (notebook 11, section 8)
+SEEDS = seed_records()  # every training of the book's recipe, seeds 0-3 (notebook 11, section 8)
+SEED_STD = findings.seed_spread(SEEDS)  # the spread of their costs
+
+
+def flocks_where(xs, cols, unit=""):
+    """Where single VGAI trainings flock, told only beyond the spread of the recipe's own seeds (findings.flock_verdict)."""
+    v = {c: findings.flock_verdict(x, SEEDS) for c, x in zip(cols, xs)}
+    name = lambda k: ", ".join(f"{c:g}{unit}" if not isinstance(c, str) else c.replace("=", " = ")
+                               for c in cols if v[c] == k) or "none"
+    return f"flocks, tighter than every seed, at {name(-1)}; does not, beyond every seed, at {name(1)}; within their spread at {name(0)}"
 
 
 def cell(table, row, col):
@@ -129,7 +138,8 @@ def table_markdown(table):
                                                        "recipe: `python -m vgai_lite reproduce` retrains it")
             parts.append(f"**{x['relative_cost_mean']:.2f}**{spread}{paper}{flock}")
         lines.append(f"| {row} | " + " | ".join(parts) + " |")
-    return (f"**{t['title']}** — ours in bold (95% CI over episodes, or ± std over training seeds), paper's in "
+    return (f"**{t['title']}** — ours in bold (95% CI over episodes, or ± std over training seeds; a VGAI cell is one "
+            "training, and the findings below widen its interval by the spread between the recipe's seeds), paper's in "
             "brackets; below, whether it flocked: the median velocity variance at 5 s and the share of episodes whose "
             f"graph is connected at 5 s, against the book's definition (notebook 01: at most {FLOCKED_VARIANCE:.0e} "
             f"m²/s² and at least {FLOCKED_CONNECTED:.0%})" + "\n\n" + "\n".join(lines))
@@ -202,7 +212,7 @@ def ordering(table):
     for c in TABLES[table]["columns"]:
         d, v, l = (cell(table, r, c) for r in ("DAGNN", "VGAI", "Local"))
         if None not in (d, v, l):
-            steps += [findings.compare(d, v), findings.compare(v, l)]
+            steps += [findings.compare(d, v), findings.compare(v, l)]  # VGAI's cell widened by the seeds' spread (cell)
         pd, pv, pl = (PAPER[table].get(r, {}).get(c) for r in ("DAGNN", "VGAI", "Local"))
         if None not in (pd, pv, pl):
             paper_ok.append(pd < pv < pl)
@@ -231,7 +241,6 @@ for table, row, direction, claim in trends:
                  + (f"; {findings.steps_text(cs, labels)}" if verdict != findings.HOLDS and len(cs) > 2 else "")))
 # three claims the paper makes in words (Table 1's caption, section 4), judged by the book's definition of a flock;
 # a VGAI cell is one training, so its flock is told only beyond the spread of the recipe's own seeds (findings.flock_verdict)
-SEEDS = seed_records()
 
 
 def flock_claim(claim, x, flocks):
@@ -576,9 +585,9 @@ bullets = [
     + ("below Local in every column" if all(findings.compare(v, l) == -1 for v, l in zip(n_v, n_l)) else
        "not below Local in every column")
     + f"; its velocity variance at 5 s grows from {n_v[0]['velocity_variance_median']['5s']:.1e} to "
-    f"{n_v[-1]['velocity_variance_median']['5s']:.1e} m²/s², so it flocks at N' = "
-    + (", ".join(f"{c:g}" for c, x in zip(n_cols, n_v) if flocked(x)) or "none")
-    + " and not at N' = " + (", ".join(f"{c:g}" for c, x in zip(n_cols, n_v) if not flocked(x)) or "none")
+    f"{n_v[-1]['velocity_variance_median']['5s']:.1e} m²/s²; one training, judged against the variances at 5 s of the "
+    f"recipe's {len(SEEDS)} training seeds at N = 50 ({min(r['velocity_variance_median']['5s'] for r in SEEDS):.1e} to "
+    f"{max(r['velocity_variance_median']['5s'] for r in SEEDS):.1e}), it " + flocks_where(n_v, n_cols).replace(" at ", " at N' = ")
     + f", and its share of episodes with a pair closer than "
     f"0.05 m is {costs(n_v, '.0%', 'share_below_0.05m')} (the expert's on the same episodes: "
     f"{costs(n_v, '.0%', 'expert_share_below_0.05m')}).",
@@ -645,29 +654,8 @@ display(Markdown("\n".join([
 #   are sums over the neighbours, which grow with the degree: the row *DAGNN (per neighbour)* divides
 #   them by it (notebook 03, section 9). VGAI's images grow too: more drones crowd each panorama.
 
-# %% [markdown]
-# **One DAGNN for every team and radius?** The authors' released training code (`dataset.py` of
-# VITA-Group/VGAI, not the paper) draws the communication radius per sample from $U(1.0, 3.5)$ m; the
-# paper's DAGNN here (`dagnn_K4`) trains at
-# $R = 1.5$ m and $N = 50$.
-# `DAGNNTrainConfig(teams=..., radii=...)` flies each DAgger round's swarms in groups whose $N$ is
-# drawn from a list and $R$ from a range (the local features of eq. 4 and the GSO follow each group's $R$;
-# the expert does not depend on it). Flown on validation episodes across the columns of Tables 2b
-# and 3 (`python tools/experiments/teams_and_radii.py`; a choice, so not on the test episodes):
-
 # %%
-from vgai_lite.evaluate import as_safe_as_expert
-
-TEAM_RUNS = {"the paper's DAGNN, dagnn_K4 (N = 50, R = 1.5 m)": "dagnn_K4", "teams 50, 100, 200": "dagnn_teams",
-             "R in [1, 2] m": "dagnn_radii", "both": "dagnn_teams_radii",
-             "teams 50, 100 (the expert stable)": "dagnn_teams_stable",
-             "teams 50, 100 and R in [1, 2] m": "dagnn_teams_radii_stable",
-             "K − 1 = 5 exchanges, R in [1, 2] m": "dagnn_K6_radii",
-             "features per neighbour (N = 50, R = 1.5 m; notebook 03)": "dagnn_per_neighbour",
-             "features per neighbour, R in [1, 2] m": "dagnn_per_neighbour_radii"}
-team_recs = {label: json.loads((DATA_DIR / "experiments" / f"{name}_teams.json").read_text())["cells"]
-             for label, name in TEAM_RUNS.items()}
-team_cols = list(next(iter(team_recs.values())))
+team_cols = list(json.loads((DATA_DIR / "experiments" / "vgai_depthcam_teams.json").read_text())["cells"])  # N' and R flown
 
 
 def team_cell(x):
@@ -675,73 +663,10 @@ def team_cell(x):
             f"{x['share_connected_at_end']:.0%} · {'flocked' if flocked(x) else 'no'}")
 
 
-display(Markdown("| DAGNN trained over | " + " | ".join(c.replace("N=", "N' = ").replace("R=", "R = ") for c in team_cols)
-                 + " |\n|---|" + "---|" * len(team_cols) + "\n" + "\n".join(
-                     f"| {label} | " + " | ".join(team_cell(cells[c]) for c in team_cols) + " |"
-                     for label, cells in team_recs.items())
-                 + "\n\nEach cell: relative cost · median velocity variance at 5 s [m²/s²] · connected at 5 s · "
-                   f"flocked; {next(iter(team_recs['both'].values()))['episodes']} validation episodes per cell."))
-shipped_t, both_t = team_recs["the paper's DAGNN, dagnn_K4 (N = 50, R = 1.5 m)"], team_recs["both"]
-newly_flocked = [c for c in team_cols if flocked(both_t[c]) and not flocked(shipped_t[c])]
-def dagnn_spread(c):
-    """The spread between the paper's DAGNN's three training seeds in the table column of c ("N=200", "R=1.0")."""
-    key, val = c.split("=")
-    return cell("N" if key == "N" else "R", "DAGNN", float(val) if key == "R" else int(val))["seed_std"]
-
-
-def lower(c):  # by the book's one rule: intervals apart, each single training's widened by the seeds' spread
-    a, b = (findings.one_training(x[c], dagnn_spread(c)) for x in (both_t, shipped_t))
-    return {-1: "below", 0: "level with (intervals overlap)", 1: "above"}[findings.compare(a, b)]
-
-
-
-prose("Drawing both in training makes the DAGNN flock where dagnn_K4 does not in {newly}. At N' = 200 its "
-      "variance at 5 s is {b200:.1e} m²/s² against dagnn_K4's {s200:.1e}, at R = 1 m {b1:.1e} against {s1:.1e} "
-      "(connected at 5 s in {bc1:.0%} and {sc1:.0%} of episodes). Its costs at N' = 100 and 200 ({c100:.2f}, {c200:.2f}) "
-      "are {lower}: eq. 1 weighs the first second, the "
-      "flock the last ones.",
-      newly=", ".join(c.replace("=", " = ") for c in newly_flocked) or "no column",
-      b200=both_t["N=200"]["velocity_variance_median"]["5s"], s200=shipped_t["N=200"]["velocity_variance_median"]["5s"],
-      b1=both_t["R=1.0"]["velocity_variance_median"]["5s"], s1=shipped_t["R=1.0"]["velocity_variance_median"]["5s"],
-      bc1=both_t["R=1.0"]["share_connected_at_end"], sc1=shipped_t["R=1.0"]["share_connected_at_end"],
-      c100=both_t["N=100"]["relative_cost_mean"], c200=both_t["N=200"]["relative_cost_mean"],
-      lower=(f"{lower('N=100')} dagnn_K4's ({shipped_t['N=100']['relative_cost_mean']:.2f}, "
-             f"{shipped_t['N=200']['relative_cost_mean']:.2f}) at both" if lower("N=100") == lower("N=200") else
-             f"{lower('N=100')} dagnn_K4's at N' = 100 ({shipped_t['N=100']['relative_cost_mean']:.2f}) and "
-             f"{lower('N=200')} it at 200 ({shipped_t['N=200']['relative_cost_mean']:.2f})"))
-
-# %%
-stab = json.loads((DATA_DIR / "experiments" / "expert_stability.json").read_text())["teams"]
-st, srt = team_recs["teams 50, 100 (the expert stable)"], team_recs["teams 50, 100 and R in [1, 2] m"]
-display(prose("The expert itself does not flock at N' = 200: sampled at Ts it multiplies a velocity deviation by 1 − N Ts "
-      "per step, which is {p200:+.0f} there (notebook 03, section 9; its variance at 5 s is {e200:.1e} m²/s²). Trained "
-      "only on teams of 50 and 100, where that factor is {p50:+.1f} and {p100:+.1f}, the DAGNN does not flock even at "
-      "N = 50 (variance at 5 s {s50:.1e} m²/s², connected at 5 s in {sc50:.0%} of episodes); its step factor there is "
-      "{f50:+.2f}, so its swarm does not oscillate, it splits. With R drawn as well it ends at {r50:.1e} at N = 50 and "
-      "{r200:.1e} at N' = 200 ({rc200:.0%} connected). {best}",
-      p200=stab["200"]["predicted_factor"], e200=stab["200"]["expert"]["velocity_variance_median"]["5s"],
-      p50=stab["50"]["predicted_factor"], p100=stab["100"]["predicted_factor"],
-      s50=st["N=50"]["velocity_variance_median"]["5s"], sc50=st["N=50"]["share_connected_at_end"],
-      f50=stab["50"]["dagnn_teams_stable"]["measured_factor"],
-      r50=srt["N=50"]["velocity_variance_median"]["5s"], r200=srt["N=200"]["velocity_variance_median"]["5s"],
-      rc200=srt["N=200"]["share_connected_at_end"],
-      best="Flocked at N' = 200: {}. Flocked at both N = 50 and N' = 100: {}.".format(
-          "; ".join(f"*{l}* ({c['N=200']['velocity_variance_median']['5s']:.1e} m²/s²)" for l, c in team_recs.items()
-                    if flocked(c["N=200"])) or "none",
-          "; ".join(f"*{l}* ({c['N=50']['velocity_variance_median']['5s']:.1e} and {c['N=100']['velocity_variance_median']['5s']:.1e})"
-                    for l, c in team_recs.items() if flocked(c["N=50"]) and flocked(c["N=100"])) or "none")))
-k6, pnt = team_recs["K − 1 = 5 exchanges, R in [1, 2] m"], team_recs["features per neighbour (N = 50, R = 1.5 m; notebook 03)"]
-pnr = team_recs["features per neighbour, R in [1, 2] m"]
-prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 5 and R drawn in training it is connected "
-      "at 5 s in {k6c:.0%} of episodes. The features' scale changes the picture at N' = 200: divided by each drone's "
-      "number of neighbours (notebook 03, section 9), the DAGNN trained at N = 50 and R = 1.5 m alone (training seed 0) "
-      "reaches {p200} m²/s² there ({pf}). At R = 1 m it keeps the swarm connected in {pc:.0%} of episodes (variance "
-      "{pv} m²/s²), and trained with R drawn in [1, 2] m in {prc:.0%} (variance {prv} m²/s²).",
-      k6c=k6["R=1.0"]["share_connected_at_end"], pc=pnt["R=1.0"]["share_connected_at_end"],
-      pv=variance_text(pnt["R=1.0"]["velocity_variance_median"]["5s"]),
-      p200=variance_text(pnt["N=200"]["velocity_variance_median"]["5s"]),
-      pf="flocked" if flocked(pnt["N=200"]) else "not flocked",
-      prc=pnr["R=1.0"]["share_connected_at_end"], prv=variance_text(pnr["R=1.0"]["velocity_variance_median"]["5s"]))
+# %% [markdown]
+# **One DAGNN for every team and radius?** Notebook 03 (section 9) trains the DAGNN over teams and radii,
+# with more exchanges, and with its features per neighbour, on validation episodes; the last is the row
+# *DAGNN (per neighbour)* above.
 
 # %% [markdown]
 # **And VGAI?** Its CNN learns to read the same six features (stage 1, and stage 3's
@@ -764,7 +689,7 @@ display(Markdown("| VGAI | " + " | ".join(c.replace("N=", "N' = ").replace("R=",
                  + " |\n|---|" + "---|" * len(team_cols) + "\n" + "\n".join(
                      f"| {label} | " + " | ".join(team_cell(cells[c]) if c in cells else "–" for c in team_cols) + " |"
                      for label, cells in vgai_team_recs.items())
-                 + "\n\nEach cell as in the DAGNN's table; –: not flown (at N = 50 a drone's 49 nearest are every "
+                 + "\n\nEach cell: relative cost · median velocity variance at 5 s [m²/s²] · connected at 5 s · flocked; validation episodes; –: not flown (at N = 50 a drone's 49 nearest are every "
                    "other drone)."))
 vb, vn, vm, vt = vgai_team_recs.values()
 
@@ -774,12 +699,12 @@ def than(c, a, b):  # by the book's one rule: intervals apart, each training's w
         findings.compare(findings.one_training(a[c], SEED_STD), findings.one_training(b[c], SEED_STD))]
 
 
-display(prose("With the features per neighbour the book's VGAI flocks in {mf}; as it is, in {bf}. Its cost is {c50} the "
+display(prose("Judged against the spread of the recipe's own seeds (one training each): with the features per neighbour "
+      "the book's VGAI {mf}; as it is, it {bf}. Its cost is {c50} the "
       "recipe's at N = 50 ({m50:.2f} against {b50:.2f}), {c200} it at N' = 200 ({m200:.2f} against {b200:.2f}; variance "
       "at 5 s {mv200} against {bv200} m²/s²) and {c1} it at R = 1 m ({m1:.2f} against {b1:.2f}; {mv1} against {bv1}). "
       "Drawing only each drone's 49 nearest, the recipe as it is reaches {nv200} m²/s² at N' = 200: {crowd}",
-      mf=", ".join(c.replace("=", " = ") for c in team_cols if flocked(vm[c])) or "no column",
-      bf=", ".join(c.replace("=", " = ") for c in team_cols if flocked(vb[c])) or "no column",
+      mf=flocks_where([vm[c] for c in team_cols], team_cols), bf=flocks_where([vb[c] for c in team_cols], team_cols),
       c50=than("N=50", vm, vb), m50=vm["N=50"]["relative_cost_mean"], b50=vb["N=50"]["relative_cost_mean"],
       c200=than("N=200", vm, vb), m200=vm["N=200"]["relative_cost_mean"], b200=vb["N=200"]["relative_cost_mean"],
       mv200=variance_text(vm["N=200"]["velocity_variance_median"]["5s"]),
@@ -794,8 +719,8 @@ display(prose("With the features per neighbour the book's VGAI flocks in {mf}; a
              if vn["N=200"]["velocity_variance_median"]["5s"] * 1.5 < vb["N=200"]["velocity_variance_median"]["5s"]
              else "not flocked, and no lower: the crowd is not what limits it.")))
 prose("Trained over teams and radii (`vgai_variant.py --teams 50,100 --radii 1.0,2.0`: each DAgger round's swarms fly in "
-      "groups of N and R, the DAGNN's way), the recipe flocks in {tf}. Against the recipe as it is: {each}.",
-      tf=", ".join(c.replace("=", " = ") for c in team_cols if flocked(vt[c])) or "no column",
+      "groups of N and R, the DAGNN's way), the recipe {tf}. Against the recipe as it is: {each}.",
+      tf=flocks_where([vt[c] for c in team_cols], team_cols),
       each="; ".join(f"{c.replace('=', ' = ')} {than(c, vt, vb)} ({vt[c]['relative_cost_mean']:.2f} against "
                      f"{vb[c]['relative_cost_mean']:.2f}; variance at 5 s {variance_text(vt[c]['velocity_variance_median']['5s'])} "
                      f"against {variance_text(vb[c]['velocity_variance_median']['5s'])} m²/s², connected "
@@ -807,17 +732,21 @@ balance = lambda N, name: (lim[N]["controllers"][name]["5s"]["damping_gain_media
                       lim[N]["controllers"][name]["5s"]["forcing_at_rest_rms_median"])
 (vg50, vf50), (vg200, vf200) = balance(50, "vgai_depthcam"), balance(200, "vgai_depthcam")
 (pg50, pf50), (pg200, pf200) = balance(50, "dagnn_per_neighbour"), balance(200, "dagnn_per_neighbour")
-prose("What limits VGAI at N' = 200, measured as notebook 11 (section 6) measures a flock's balance: how hard a "
+(sg50, sf50), (sg200, sf200) = balance(50, "dagnn_K4"), balance(200, "dagnn_K4")
+prose("What moves with the team, measured as notebook 11 (section 6) measures a flock's balance: how hard a "
       "controller brakes a velocity disagreement it sees (the damping gain γ) and how hard it pushes drones apart "
       "that already agree (the forcing at rest f), at 5 s of {e} validation flights at N = 50 and at N' = 200 "
-      "(`python tools/experiments/consensus_limit.py --N 200`; medians over the flights, without intervals). From "
-      "N = 50 to N' = 200 the book's recipe (training seed 0) goes from γ = {vg50:.1f} to {vg200:.1f} /s and from "
-      "f = {vf50:.2f} to {vf200:.2f} m/s² ({vfr:.1f}×); the DAGNN per neighbour (training seed 0) from γ = {pg50:.1f} to "
-      "{pg200:.1f} /s and from f = {pf50:.2f} to {pf200:.2f} m/s² ({pfr:.1f}×). Both brake more weakly in the larger "
-      "team; what VGAI adds there is the push on drones that already agree, which the DAGNN per neighbour does not "
-      "have, and reading VGAI's features per neighbour did not remove it (the table above).",
+      "(`python tools/experiments/consensus_limit.py --N 200`; medians over the flights of one training each, "
+      "without intervals: a measurement of what moves, not a verdict). From N = 50 to N' = 200: the book's recipe "
+      "(training seed 0) γ {vg50:.1f} → {vg200:.1f} /s, f {vf50:.2f} → {vf200:.2f} m/s²; the paper's DAGNN, which reads "
+      "the local features' sums (`dagnn_K4`), γ {sg50:.1f} → {sg200:.1f} /s, f {sf50:.2f} → {sf200:.2f} m/s²; the DAGNN per "
+      "neighbour γ {pg50:.1f} → {pg200:.1f} /s, f {pf50:.2f} → {pf200:.2f} m/s². The two that read sums (VGAI's CNN is "
+      "trained to read the same sums) push drones that already agree {vfr:.0f}× and {sfr:.0f}× harder in the larger "
+      "team; the one that reads means does not. Trained to read means, VGAI did not flock there either (the table "
+      "above): its limit at N' = 200 is not the features' scale alone.",
       e=lim[200]["episodes"], vg50=vg50, vg200=vg200, vf50=vf50, vf200=vf200, vfr=vf200 / vf50,
-      pg50=pg50, pg200=pg200, pf50=pf50, pf200=pf200, pfr=pf200 / pf50)
+      sg50=sg50, sg200=sg200, sf50=sf50, sf200=sf200, sfr=sf200 / sf50,
+      pg50=pg50, pg200=pg200, pf50=pf50, pf200=pf200)
 
 # %% [markdown]
 # How our VGAI's world differs from the paper's. The list above explains why ours might differ;
@@ -833,7 +762,8 @@ mixture = json.loads((DATA_DIR / "test" / "vgai_F24_mixture.json").read_text())
 yes = {True: "flocked", False: "did not flock"}
 below_3 = [(t, row, c, x) for t in TABLES for row, xs in results["tables"][t]["rows"].items() for c in TABLES[t]["columns"]
            if (x := xs.get(str(c))) and x["relative_cost_mean"] < 3 and "velocity_variance_median" in x]
-not_flocking = [(t, row, c, x) for t, row, c, x in below_3 if not flocked(x)]
+not_flocking = [(t, row, c, x) for t, row, c, x in below_3  # a VGAI cell (one training) only beyond the seeds' spread
+                if (findings.flock_verdict(x, SEEDS) == 1 if row.startswith("VGAI") else not flocked(x))]
 load_exp = lambda name: json.loads((DATA_DIR / "experiments" / f"{name}.json").read_text())
 one_frame = load_exp(LEAVE_ONE_OUT["the second frame"][0])
 no_aux = load_exp(LEAVE_ONE_OUT["the state-estimation loss in stage 3"][0])

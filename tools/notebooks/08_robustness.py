@@ -143,7 +143,8 @@ plt.show()
 # %%
 noise_motion = vgai.vision.motion_scale * 2 ** 0.5 * 0.05
 prose("On drone 0's panorama the motion channel averages {clean:.3f} in size when the frames are clean: "
-      "drones move a fraction of a column in five steps. Pixel noise of standard deviation 0.05 on each "
+      "this panorama is of the initial state, where the drones still move at metres per second (late in a flight, "
+      "at a few cm/s, a neighbour moves a fraction of a column in five steps). Pixel noise of standard deviation 0.05 on each "
       "frame becomes noise of about {amp:.2f} on that channel (the difference of two noisy frames, times "
       "{scale:g}), and the channel's average size becomes {noisy:.3f}: for a CNN that never saw noisy frames the "
       "motion signal it reads its neighbours' velocities from drowns (section 6), while the gray channel still looks "
@@ -441,8 +442,8 @@ prose("The camera ranges, drawn per flight and per window:\n\n{ranges}\n\nChosen
 
 # %% [markdown]
 # **On the test episodes, and a second training seed.** The gray-only VGAI chosen above is flown once
-# on test episodes, clean and through the authors' perturbations (`camera_eval.py --seed 5000`, as many
-# episodes as the validation cells; notebook 09 flies it on the 50 test episodes of its table);
+# on test episodes, clean and through the authors' perturbations (`camera_eval.py --seed 5000`; the
+# episodes are counted under the table, and notebook 09 flies it on the test episodes of its table);
 # beside it, the same recipe trained from a second seed, on the validation episodes, shows how far
 # another training lands.
 
@@ -564,7 +565,10 @@ assert {c["seed"] for c in dt.values()} == {TEST_SEED}, "the test episodes only"
 display(Markdown("| setting | test episodes |\n|---|---|\n" + "\n".join(f"| {k} | {cam_cell(dt[k])} |" for k in target_keys)
                  + f"\n\nEach cell: relative cost (95% CI) · variance at 5 s [m²/s²] · connected at 5 s · flocked; "
                    f"{dt['clean']['episodes']} test episodes (seed {dt['clean']['seed']})."))
-misses = [k for k in ("noise0.1", "blur2.8", "dead") if not apart_ok(dt[k])]
+local_test = relative_cost(LocalController(FlockConfig()), FlockConfig(), episodes=dt["clean"]["episodes"],
+                           seed=TEST_SEED).mean_ratio  # Local on the same test episodes
+misses = [k for k in ("noise0.1", "blur2.8", "dead")
+          if not (dt[k]["share_connected_at_end"] >= 0.9 and dt[k]["relative_cost_mean"] < local_test)]
 prose("On the test episodes the depth camera costs {cc:.2f} on clean frames ({cf}); at the authors' noise {an:.2f} and "
       "blur {ab:.2f} ({a12}: flocked, as safe as the expert and within 1.25× the clean cost); at σ = 0.05 and blur 1.4° "
       "{a34} (variance at 5 s {v3} and {v4} m²/s²); at σ = 0.1, blur 2.8° and with a dead camera it {a5}{unsafe}.",
@@ -576,7 +580,8 @@ prose("On the test episodes the depth camera costs {cc:.2f} on clean frames ({cf
       a34=ok(dt["noise0.05"]["flocked"] and dt["blur1.4"]["flocked"]),
       v3=variance_text(dt["noise0.05"]["velocity_variance_median"]["5s"]),
       v4=variance_text(dt["blur1.4"]["velocity_variance_median"]["5s"]),
-      a5=("stays connected in nine episodes of ten and below the local heuristic (met)" if not misses else
+      a5=(f"stays connected in nine episodes of ten and below the local heuristic's {local_test:.2f} on these episodes (met)"
+          if not misses else
           "misses the target (connected ≥ 90% and below the local heuristic) with " + ", ".join(
               f"{k}: {dt[k]['share_connected_at_end']:.0%} connected, {dt[k]['relative_cost_mean']:.2f}" for k in misses)),
       unsafe=("; it is less safe than the expert with " + ", ".join({"dead": "a dead camera"}.get(k, k) for k in target_keys
@@ -586,7 +591,7 @@ prose("On the test episodes the depth camera costs {cc:.2f} on clean frames ({cf
 # %% [markdown]
 # **What limits it: does the CNN still read the velocities?** The expert's accelerations answer the
 # neighbours' relative velocities (notebook 11, section 4), and they live in the motion channel, the difference of two frames
-# g steps apart: their noise adds, while a neighbour moves a fraction of a column in g steps. Each
+# g steps apart: their noise adds, while late in a flight a neighbour moves a fraction of a column in g steps. Each
 # VGAI's state-estimation head (kept by the book's recipe) is read on expert flights from the
 # validation initial conditions, through sensor noise of each σ: the correlation of its estimate of
 # the velocity sums of the local features (eq. 4's rows) with the exact ones, early in the flight, when the drones still move
@@ -748,7 +753,7 @@ prose("* **Half of all messages lost** {dw} for the DAGNN ({dl:.2f}, clean {dc:.
       "camera {deadw} ({dead:.2f}, {deadf}; connected in {deadc:.0%} of episodes), and pixel noise {n2w} at "
       "sigma = 0.02 ({vn2:.2f}, {n2f}) and at sigma = {s:g} costs {vn:.2f} ({vnf}; connected in {vnc:.0%} of "
       "episodes). VGAI reads its neighbours' velocities from the difference of two frames five steps apart, in "
-      "which a drone moves a fraction of a column (notebook 04), so noise on that difference looks like motion; the "
+      "which a drone moves a fraction of a column late in a flight (notebook 04), so noise on that difference looks like motion; the "
       "camera model teaches it to see through it, and the same recipe trained on clean frames no longer flocks at "
       "σ = {clean_breaks:g} (section 6).\n"
       "* **The DAGNN's analogue, noisy positions**: {p05:.2f} at sigma = 0.05 m ({p05f}), {p20:.2f} at 0.2 m "

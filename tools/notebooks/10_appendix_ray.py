@@ -48,8 +48,8 @@ results = load_results()  # the committed full run: data/results/results.json
 # VGAIs of Table 1b that share a first stage, then the slowest cell); it ignores Ray's own overhead
 # and assumes every machine is this one. Each training's time is the one its record holds (how it ran
 # is in the record's provenance, and most VGAI trainings shared the two cores with another job, which
-# makes them slower than alone: notebook 06 times the recipe alone), so the projection is an upper
-# bound, as good as those records.
+# makes them slower than alone: notebook 06 times the recipe alone). So the projection is an estimate:
+# the shared-core trainings push it up, Ray's own overhead (measured below) pushes it down.
 
 # %%
 from vgai_lite.lab.ray_runner import projected_hours

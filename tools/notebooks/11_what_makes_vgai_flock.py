@@ -134,6 +134,7 @@ costs = [r["relative_cost_mean"] for r in paper_vgai.values()]
 still = relative_cost(lambda r, v: torch.zeros_like(v), cfg, some["episodes"], seed=some["seed"], name="do nothing")
 first = [r["round_checks"][0]["check_relative_cost"] for r in paper_vgai.values()]
 still_rec = still.summary()
+paper_row = {"relative_cost_mean": float(np.mean(costs)), "per_seed": costs, "seed_std": float(np.std(costs, ddof=1))}
 says_still = {-1: "costs less than doing nothing", 0: "cannot be told from doing nothing",
               1: "costs more than doing nothing"}
 prose("The paper's VGAI in the book's world costs {lo:.2f} to {hi:.2f} across {ns} training seeds (the paper reports "
@@ -150,7 +151,9 @@ prose("The paper's VGAI in the book's world costs {lo:.2f} to {hi:.2f} across {n
       safe=("as safe as the expert" if all(as_safe_as_expert(r) for r in paper_vgai.values()) else
             f"as safe as the expert in {sum(as_safe_as_expert(r) for r in paper_vgai.values())} of {len(paper_vgai)} seeds"),
       still=still.mean_ratio, still_var=float(still.summary()["velocity_variance_median"]["5s"]),
-      verdict="; ".join(f"seed {s} {says_still[findings.compare(r, still_rec)]}" for s, r in paper_vgai.items()),
+      verdict="over its {n} seeds, {m:.2f} ({lo:.2f}-{hi:.2f}: the mean ± 1.96 × their spread / √seeds), it {says}".format(
+          n=len(costs), m=np.mean(costs), lo=findings.interval(paper_row)[0], hi=findings.interval(paper_row)[1],
+          says=says_still[findings.compare(paper_row, still_rec)]),
       first=", ".join(f"{c:.1f}" for c in first),
       last=", ".join(f"{r['relative_cost_mean']:.1f}" for r in paper_vgai.values()),
       minutes=", ".join(f"{training_minutes(r):.0f}" for r in paper_vgai.values()))
@@ -521,7 +524,11 @@ display(Markdown("| without | from the book's recipe (through the camera) | from
 clean_cams = load_exp(f"{CLEAN_SEED_RUNS[0]}_cameras")["settings"]
 book_cams = load_exp(f"{CAMERA_SEED_RUNS[0]}_cameras")["settings"]
 authors = f"noise{10 / 255:.4g}"
-changed = [d for d in loo_clean if flocked(loo[d]) != flocked(loo_clean[d])]
+def needs_class(rec, seeds):  # as findings.needs reads a row: spare (flocks), needed (beyond the seeds), or within
+    return "spare" if flocked(rec) else "needed" if findings.flock_verdict(rec, seeds) == 1 else "within"
+
+
+changed = [d for d in loo_clean if {needs_class(loo[d], cam_recs), needs_class(loo_clean[d], clean_recs)} == {"spare", "needed"}]
 display(prose("What the flock needs, from the book's recipe (each row one training, seed 0): {verdict} {camera} {moved}",
               verdict=findings.needs(loo, cam_recs),
               camera=("The camera model is judged through a camera, not on clean frames: trained without it, the recipe "
@@ -531,7 +538,8 @@ display(prose("What the flock needs, from the book's recipe (each row one traini
                   cf="flocked" if flocked(clean_cams[authors]) else "did not flock",
                   bn=book_cams[authors]["relative_cost_mean"],
                   bf="flocked" if flocked(book_cams[authors]) else "did not flock"),
-              moved=("From the recipe on clean frames the verdicts agree for every departure." if not changed else
+              moved=("From the recipe on clean frames no departure goes from needed to spare, each judged against its own "
+                     "recipe's seeds." if not changed else
                      "The verdicts differ between the two recipes for {c}: what a departure buys depends on the "
                      "rest of the recipe.".format(c=" and ".join([", ".join(changed[:-1]), changed[-1]] if len(changed) > 1
                                                                  else changed)))))

@@ -9,8 +9,8 @@ differ only when they differ by more than the seeds do. Then:
 
   a < b   when a's interval lies entirely below b's (the two do not overlap)
   a trend ("falls as F grows") holds when every step of the series is such a difference in the
-          trend's direction; it is contradicted when some step is one in the other direction;
-          otherwise our numbers cannot tell (at least one step is within its intervals).
+          trend's direction; it is contradicted when some step, or the series from end to end, is one
+          in the other direction; otherwise our numbers cannot tell (at least one step is within its intervals).
 
 A share of episodes (connected at 5 s) is compared the same way, with its Wilson 95 % interval.
 The paper reports no intervals: its column compares its numbers as printed.
@@ -103,7 +103,7 @@ def trend(cells: Sequence[dict], direction: int) -> str:
     steps = [compare(b, a) for a, b in zip(cells, cells[1:])]
     if all(s == direction for s in steps):
         return HOLDS
-    if any(s == -direction for s in steps):
+    if any(s == -direction for s in steps) or compare(cells[-1], cells[0]) == -direction:  # a step, or end to end
         return CONTRADICTED
     return CANNOT_TELL
 
@@ -191,8 +191,10 @@ def needs(without: dict, seeds: Sequence[dict]) -> str:
 def steps_text(cells: Sequence[dict], labels: Sequence) -> str:
     """Each step of a series by the criterion: '1 → 2 lower, 2 → 3 within the intervals'."""
     word = {-1: "lower", 0: "within the intervals", 1: "higher"}
-    return ", ".join(f"{la} → {lb} {word[compare(b, a)]}"
-                     for (la, a), (lb, b) in zip(zip(labels, cells), zip(labels[1:], cells[1:])))
+    steps = [f"{la} → {lb} {word[compare(b, a)]}" for (la, a), (lb, b) in zip(zip(labels, cells), zip(labels[1:], cells[1:]))]
+    if len(cells) > 2:  # and end to end, which a trend must not reverse either
+        steps.append(f"{labels[0]} → {labels[-1]} {word[compare(cells[-1], cells[0])]}")
+    return ", ".join(steps)
 
 
 def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) -> str:
@@ -200,7 +202,7 @@ def sentence(claim: str, verdict: str, cells: Sequence[dict], labels: Sequence) 
     and the numbers behind it; where the verdict is not HOLDS over more than one step, each step's
     own verdict (a clear first step is not hidden by a later one within its intervals)."""
     how = {HOLDS: "holds in ours: every step is larger than its intervals",
-           CONTRADICTED: "does not hold in ours: some step goes the other way by more than its intervals",
+           CONTRADICTED: "does not hold in ours: some step, or the series end to end, goes the other way by more than its intervals",
            CANNOT_TELL: "cannot be told from ours: at least one step is within its intervals"}[verdict]
     steps = f"; step by step, {steps_text(cells, labels)}" if verdict != HOLDS and len(cells) > 2 else ""
     return f"{claim}: {how} ({series_text(cells, labels)}{steps})."
