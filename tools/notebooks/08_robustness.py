@@ -497,7 +497,7 @@ assert {(r["seed"], r["episodes"]) for r in cam_seeds.values()} == {(r["seed"], 
 
 def over_seeds(costs):
     """A row over training seeds, as findings reads it: the mean and the spread between seeds."""
-    return {"relative_cost_mean": float(np.mean(costs)), "per_seed": list(costs), "seed_std": float(np.std(costs, ddof=1))}
+    return findings.over_seeds(costs)
 
 
 def seed_row(name, rec):

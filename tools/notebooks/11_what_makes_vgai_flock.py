@@ -134,7 +134,7 @@ costs = [r["relative_cost_mean"] for r in paper_vgai.values()]
 still = relative_cost(lambda r, v: torch.zeros_like(v), cfg, some["episodes"], seed=some["seed"], name="do nothing")
 first = [r["round_checks"][0]["check_relative_cost"] for r in paper_vgai.values()]
 still_rec = still.summary()
-paper_row = {"relative_cost_mean": float(np.mean(costs)), "per_seed": costs, "seed_std": float(np.std(costs, ddof=1))}
+paper_row = findings.over_seeds(costs)
 says_still = {-1: "costs less than doing nothing", 0: "cannot be told from doing nothing",
               1: "costs more than doing nothing"}
 prose("The paper's VGAI in the book's world costs {lo:.2f} to {hi:.2f} across {ns} training seeds (the paper reports "
@@ -477,7 +477,7 @@ def yardstick(names):
     """The recipe over its training seeds: the mean cost with the seed spread (findings.interval reads it)."""
     recs = [load_exp(n) for n in names]
     costs = [r["relative_cost_mean"] for r in recs]
-    return recs, {"relative_cost_mean": sum(costs) / len(costs), "per_seed": costs, "seed_std": float(np.std(costs, ddof=1))}
+    return recs, findings.over_seeds(costs)
 
 
 cam_recs, recipe = yardstick(CAMERA_SEED_RUNS)

@@ -2,8 +2,8 @@
 
 Introduced in notebook 03 (its first use); notebook 07 checks the paper's findings with it. A relative cost comes
 with an interval: its bootstrap 95 % interval over episodes, or, for a row averaged over several
-training seeds, mean ± 1.96 × (spread over seeds) / √seeds. A cell flown by ONE training of a VGAI
-configuration (``one_training``) also carries the spread between that configuration's training seeds:
+training seeds (``over_seeds``), mean ± 1.96 × (spread over seeds) / √seeds. A cell flown by ONE training
+of a configuration (``one_training``) also carries the spread between that configuration's training seeds:
 its interval reaches mean ± √(episode half-width² + (1.96 × seed spread)²), so two single trainings
 differ only when they differ by more than the seeds do. Then:
 
@@ -38,6 +38,14 @@ def seed_spread(records: Sequence[dict]) -> float:
         raise ValueError(f"a spread between training seeds needs at least two trainings, got {len(costs)}")
     mean = sum(costs) / len(costs)
     return math.sqrt(sum((c - mean) ** 2 for c in costs) / (len(costs) - 1))
+
+
+def over_seeds(costs: Sequence[float]) -> dict:
+    """A row over the training seeds of one configuration, as ``interval`` reads it: the mean cost, the costs per
+    seed and their spread (``seed_spread``)."""
+    costs = [float(c) for c in costs]
+    return {"relative_cost_mean": sum(costs) / len(costs), "per_seed": costs,
+            "seed_std": seed_spread([{"relative_cost_mean": c} for c in costs])}
 
 
 def one_training(cell: dict, seed_std: float) -> dict:
