@@ -149,6 +149,27 @@ def test_consensus_figures_tell_a_flock_from_a_swarm_that_falls_apart():
     assert groups(chain, 1.5).tolist() == [1]
 
 
+def test_connected_at_start_reads_the_graph_the_flown_episodes_start_from():
+    """Every drone has two neighbours at t = 0 (the sampler's constraint) but at R = 1 m some graphs start in
+    pieces: connected_at_start must tell those episodes apart, on the very initial conditions flown."""
+    from vgai_lite.consensus import connected_at_start
+    from vgai_lite.flocking import sample_initial_state
+
+    cfg = FlockConfig(R=1.0)
+    start = connected_at_start(cfg, 10, seed=3000)
+    r0, _ = sample_initial_state(cfg, 10, torch.Generator().manual_seed(3000))
+    for e in range(10):  # an independent breadth-first search over the same positions
+        near = (torch.cdist(r0[e], r0[e]) <= cfg.R).tolist()
+        seen, todo = {0}, [0]
+        while todo:
+            i = todo.pop()
+            new = {j for j, n in enumerate(near[i]) if n} - seen
+            seen |= new
+            todo += list(new)
+        assert bool(start[e]) == (len(seen) == cfg.N), e
+    assert 0 < int(start.sum()) < 10  # these episodes hold both kinds
+    assert bool(connected_at_start(FlockConfig(), 10, seed=3000).all())  # at R = 1.5 m every one starts connected
+
 def test_prose_renders_computed_numbers_and_refuses_what_it_cannot():
     import pytest
 

@@ -33,6 +33,16 @@ def groups(r: torch.Tensor, R: float) -> torch.Tensor:
     return torch.tensor([len(torch.unique(f)) for f in first])
 
 
+def connected_at_start(cfg: FlockConfig, episodes: int, *, seed: int) -> torch.Tensor:
+    """(episodes,) bool: is the communication graph of radius cfg.R connected at t = 0 in each of the
+    episodes of ``seed`` (the initial conditions ``consensus`` and ``evaluate.relative_cost`` fly)?
+    The initial-state constraints ask every drone for two neighbours, not for one connected graph; a
+    decentralized controller cannot join two groups that start apart except by chance, so the share
+    connected at t = 0 bounds what it can keep connected (the centralized expert hears every drone)."""
+    r0, _ = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
+    return groups(r0, cfg.R) == 1
+
+
 @dataclass
 class Consensus:
     """A controller's flocking figures on ``episodes`` flights of ``steps`` steps.

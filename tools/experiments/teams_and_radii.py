@@ -11,7 +11,9 @@ evaluates a checkpoint, then flies it on validation episodes (``book.VALIDATION_
 choice, so never the test episodes) at every N' of ``--fly-teams`` (R = 1.5 m) and every R of
 ``--fly-radii`` (N = 50), as ``reproduce.flight_config`` flies the tables' columns. Writes
 ``data/experiments/NAME_teams.json`` (and the checkpoint ``NAME.pt`` when it trains): per cell the
-relative cost with its interval, the velocity variance at 5 s, connectivity at 5 s, closest approaches.
+relative cost with its interval, the velocity variance at 5 s, connectivity at 5 s, closest approaches, and
+the share of episodes whose graph is connected at t = 0 (``consensus.connected_at_start``: the bound a
+decentralized controller faces) with the share of those it keeps connected.
 ``--test`` flies a controller chosen on them on the test episodes instead (reporting only).
 ``--nearest K`` flies a VGAI with a renderer that draws only each drone's K nearest drones
 (``RenderConfig.nearest``): in a team larger than it trained in, the panorama it trained on.
@@ -32,6 +34,7 @@ sys.path.insert(0, str(ROOT))
 
 from vgai_lite import DAGNNTrainConfig, FlockConfig, load_controller, relative_cost, train_dagnn  # noqa: E402
 from vgai_lite.book import DATA_DIR, TEST_SEED, VALIDATION_SEED  # noqa: E402
+from vgai_lite.consensus import connected_at_start  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.reproduce import ReproduceConfig, flight_config  # noqa: E402
 
@@ -85,8 +88,12 @@ def main(argv=None) -> int:
                 render = dataclasses.replace(flown.vision.render, nearest=args.nearest)
                 flown.vision = dataclasses.replace(flown.vision, render=render)
             res = relative_cost(flown, flight, episodes=args.episodes, seed=seed, name=args.name)
-            print(f"{table} = {column}: {res}", flush=True)
-            out["cells"][f"{table}={column}"] = {"config": {"N": flight.N, "R": flight.R}, **res.summary()}
+            start = connected_at_start(flight, args.episodes, seed=seed)  # the bound a decentralized controller faces
+            end = res.flocking.groups_at_end == 1
+            print(f"{table} = {column}: {res}; connected at t = 0 in {start.double().mean():.0%}", flush=True)
+            out["cells"][f"{table}={column}"] = {"config": {"N": flight.N, "R": flight.R}, **res.summary(),
+                                                 "share_connected_at_start": round(float(start.double().mean()), 3),
+                                                 "share_kept_connected": round(float(end[start].double().mean()), 3)}
     out["evaluation"] = prov.record(checkpoint=ckpt, seed=seed, episodes=args.episodes)
     path = folder / f"{args.name}_teams{'_test' if args.test else ''}.json"
     path.write_text(json.dumps(out, indent=1) + "\n")
