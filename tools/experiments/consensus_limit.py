@@ -125,7 +125,8 @@ def fly_given(args, cfg: FlockConfig, paths: list, argv) -> int:
            "expert_damping_gain": cfg.N, "controllers": {}}
     with Provenance(command) as prov:
         for path in paths:
-            res = damping_and_forcing(load_controller(path), cfg, args.episodes, seed=args.seed)
+            # the controller's graph (and a VGAI's camera) in the flight's team and radius, as reproduce flies a column
+            res = damping_and_forcing(load_controller(path, cfg=cfg), cfg, args.episodes, seed=args.seed)
             out["controllers"][path.stem] = res
             report(path.stem, res)
     out["provenance"] = prov.record(seed=args.seed, episodes=args.episodes,
