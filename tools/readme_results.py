@@ -25,6 +25,8 @@ from vgai_lite.lab.runs import (PAPER_SEEDS, TIMED_ALONE, TRAINING_TARGET_MINUTE
                                 how_trained, training_minutes)
 from vgai_lite.vgai_config import VGAITrainConfig, book_recipe  # noqa: E402
 from vgai_lite.book import TEST_SEED  # noqa: E402
+from vgai_lite.config import FlockConfig  # noqa: E402
+from vgai_lite.consensus import connected_at_start  # noqa: E402
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 README = ROOT / "README.md"
@@ -177,6 +179,8 @@ def _per_neighbour_cells(results: dict) -> str:
                 f"{x['velocity_variance_median']['5s']:.1e} m²/s², connected at 5 s in {x['share_connected_at_end']:.0%}, "
                 + ("flocked" if flocked(x) else "not flocked"))
     seeds = len(rows["N"]["rows"]["DAGNN (per neighbour)"]["200"]["per_seed"])
+    r1 = rows["R"]["rows"]["DAGNN (per neighbour)"]["1.0"]
+    start_r1 = float(connected_at_start(FlockConfig(R=1.0), r1["episodes"], seed=TEST_SEED).double().mean())
     seed_recs = seed_records()
     n75 = findings.one_training(rows["N"]["rows"]["VGAI"]["75"], findings.seed_spread(seed_recs))
     lo75, hi75 = findings.interval(n75)
@@ -190,7 +194,9 @@ def _per_neighbour_cells(results: dict) -> str:
             f" The row *DAGNN (per neighbour)* of Tables 2b and 3 (the paper's DAGNN with the local features' sums divided by each "
             f"drone's degree, trained at N = 50 and R = 1.5 m, {seeds} training seeds): at N' = 200 "
             f"{cell('N', 'DAGNN (per neighbour)', '200')}, against the paper's DAGNN's {cell('N', 'DAGNN', '200')}; at R = 1 m "
-            f"{cell('R', 'DAGNN (per neighbour)', '1.0')}, against {cell('R', 'DAGNN', '1.0')}.")
+            f"{cell('R', 'DAGNN (per neighbour)', '1.0')}, against {cell('R', 'DAGNN', '1.0')}; "
+            f"{start_r1:.0%} of these episodes start connected at R = 1 m, the most a decentralized controller can "
+            f"count on (`consensus.connected_at_start`, notebook 03, section 9).")
 
 
 def _how(record: dict) -> str:

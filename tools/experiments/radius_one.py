@@ -124,7 +124,8 @@ def main(argv=None) -> int:
                 runs.append({"checkpoint": run["checkpoint"], **_figures(res, start)})
                 print(f"gain x{gain:g}", runs[-1], flush=True)
             out["gains"][f"{gain:g}"] = runs
-    out["provenance"] = prov.record(seed=seed, episodes=args.episodes)
+    flown = [run["checkpoint"] for recipe in out["recipes"].values() for run in recipe["runs"]]
+    out["provenance"] = prov.record(seed=seed, episodes=args.episodes, checkpoints={c: sha256(c) for c in flown})
     Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
     print("wrote", args.out)
     return 0

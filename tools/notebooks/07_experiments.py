@@ -39,6 +39,7 @@ from IPython.display import Markdown, display
 from vgai_lite import ExpertController, FlockConfig, LocalController, relative_cost, rollout, sample_initial_state
 from vgai_lite.book import DATA_DIR, ROOT, TEST_SEED, pick, prose
 from vgai_lite.evaluate import FLOCKED_CONNECTED, FLOCKED_VARIANCE, as_safe_as_expert, flocked, variance_text
+from vgai_lite.consensus import connected_at_start
 from vgai_lite.graphs import adjacency
 from vgai_lite.lab import findings
 from vgai_lite.lab.reproduce import PAPER, TABLES, load_results
@@ -598,6 +599,7 @@ r_cols = TABLES["R"]["columns"]
 r1_flight = FlockConfig(R=r_cols[0])  # the expert's own swarm at the smallest radius, on the same test episodes
 expert_r1 = relative_cost(ExpertController(r1_flight), r1_flight, episodes=pick(prov["reproduce_config"]["episodes"], 2),
                           seed=TEST_SEED).summary()
+start_r1 = float(connected_at_start(r1_flight, expert_r1["episodes"], seed=TEST_SEED).double().mean())
 n_d, n_p = ([cell("N", r, c) for c in n_cols] for r in ("DAGNN", "DAGNN (per neighbour)"))
 r_d, r_p = ([cell("R", r, c) for c in r_cols] for r in ("DAGNN", "DAGNN (per neighbour)"))
 
@@ -617,7 +619,8 @@ bullets.append(
     + f"). At R = {r_cols[0]:g} m its swarm is connected at 5 s in {r_p[0]['share_connected_at_end']:.0%} of episodes "
     f"(variance {r_p[0]['velocity_variance_median']['5s']:.1e} m²/s²), the paper's DAGNN's in "
     f"{r_d[0]['share_connected_at_end']:.0%} ({r_d[0]['velocity_variance_median']['5s']:.1e}), and the expert's own, "
-    f"which hears every drone, in {expert_r1['share_connected_at_end']:.0%} of the same episodes. Its closest approaches: "
+    f"which hears every drone, in {expert_r1['share_connected_at_end']:.0%} of the same episodes; {start_r1:.0%} of them "
+    "start connected, the most a decentralized controller can count on (notebook 03, section 9). Its closest approaches: "
     f"a pair closer than 0.05 m in {costs(n_p, '.0%', 'share_below_0.05m')} of episodes at N' = "
     f"{', '.join(f'{c:g}' for c in n_cols)} (the expert's: {costs(n_p, '.0%', 'expert_share_below_0.05m')}).")
 display(Markdown("\n".join(bullets)))
@@ -684,7 +687,8 @@ def team_cell(x):
 VGAI_TEAM_RUNS = {"the book's recipe": "vgai_depthcam",
                   "the same, drawing each drone's 49 nearest": "vgai_depthcam_nearest49",
                   "features per neighbour": "vgai_depthcam_means",
-                  "trained over teams N in {50, 100} and R in [1, 2] m": "vgai_depthcam_teams_radii"}
+                  "trained over teams N in {50, 100} and R in [1, 2] m": "vgai_depthcam_teams_radii",
+                  "trained over R in [1, 2] m (N = 50)": "vgai_depthcam_radii"}
 vgai_team_recs = {label: json.loads((DATA_DIR / "experiments" / f"{name}_teams.json").read_text())["cells"]
                   for label, name in VGAI_TEAM_RUNS.items()}
 display(Markdown("| VGAI | " + " | ".join(c.replace("N=", "N' = ").replace("R=", "R = ") for c in team_cols)
@@ -693,7 +697,7 @@ display(Markdown("| VGAI | " + " | ".join(c.replace("N=", "N' = ").replace("R=",
                      for label, cells in vgai_team_recs.items())
                  + "\n\nEach cell: relative cost · median velocity variance at 5 s [m²/s²] · connected at 5 s · flocked; validation episodes; –: not flown (at N = 50 a drone's 49 nearest are every "
                    "other drone)."))
-vb, vn, vm, vt = vgai_team_recs.values()
+vb, vn, vm, vt, vr = vgai_team_recs.values()
 
 
 def than(c, a, b):  # by the book's one rule: intervals apart, each training's widened by the recipe's seed spread
@@ -721,7 +725,18 @@ display(prose("Judged against the spread of the recipe's own seeds (one training
              if vn["N=200"]["velocity_variance_median"]["5s"] * 1.5 < vb["N=200"]["velocity_variance_median"]["5s"]
              else "not flocked, and no lower: the crowd is not what limits it.")))
 prose("Trained over teams and radii (`vgai_variant.py --teams 50,100 --radii 1.0,2.0`: each DAgger round's swarms fly in "
-      "groups of N and R, the DAGNN's way), the recipe {tf}. Against the recipe as it is: {each}.",
+      "groups of N and R, the DAGNN's way), the recipe {tf}. Against the recipe as it is: {each}. Over radii alone "
+      "(`--radii 1.0,2.0`, teams of 50; {rmin:.0f} min alone on the two cores) it {rf}; at R = 1 m its variance at 5 s "
+      "is {rv1} m²/s² against {bv1_}: {align}. At R = 1 m its swarm is "
+      "connected at 5 s in {rc1:.0%} of episodes though {rs1:.0%} start connected: a camera sees drones beyond the radius.",
+      rmin=json.loads((DATA_DIR / "experiments" / "vgai_depthcam_radii.json").read_text())["train_seconds"] / 60,
+      rf=flocks_where([vr[c] for c in team_cols], team_cols),
+      rv1=variance_text(vr["R=1.0"]["velocity_variance_median"]["5s"]),
+      bv1_=variance_text(vb["R=1.0"]["velocity_variance_median"]["5s"]),
+      rc1=vr["R=1.0"]["share_connected_at_end"], rs1=vr["R=1.0"]["share_connected_at_start"],
+      align={1: "drawing R in training does not make it align there, beyond every seed's variance at N = 50",
+             0: "whether drawing R in training makes it align there cannot be told from the seeds' spread",
+             -1: "drawing R in training makes it align there"}[findings.flock_verdict(vr["R=1.0"], SEEDS)],
       tf=flocks_where([vt[c] for c in team_cols], team_cols),
       each="; ".join(f"{c.replace('=', ' = ')} {than(c, vt, vb)} ({vt[c]['relative_cost_mean']:.2f} against "
                      f"{vb[c]['relative_cost_mean']:.2f}; variance at 5 s {variance_text(vt[c]['velocity_variance_median']['5s'])} "
@@ -735,6 +750,8 @@ balance = lambda N, name: (lim[N]["controllers"][name]["5s"]["damping_gain_media
 (vg50, vf50), (vg200, vf200) = balance(50, "vgai_depthcam"), balance(200, "vgai_depthcam")
 (pg50, pf50), (pg200, pf200) = balance(50, "dagnn_per_neighbour"), balance(200, "dagnn_per_neighbour")
 (sg50, sf50), (sg200, sf200) = balance(50, "dagnn_K4"), balance(200, "dagnn_K4")
+limr = {name: rec["5s"] for name, rec in json.loads((DATA_DIR / "experiments" / "consensus_limit_R1.json").read_text())["controllers"].items()}
+assert json.loads((DATA_DIR / "experiments" / "consensus_limit_R1.json").read_text())["R"] == 1.0
 prose("What moves with the team, measured as notebook 11 (section 6) measures a flock's balance: how hard a "
       "controller brakes a velocity disagreement it sees (the damping gain γ) and how hard it pushes drones apart "
       "that already agree (the forcing at rest f), at 5 s of {e} validation flights at N = 50 and at N' = 200 "
@@ -745,7 +762,18 @@ prose("What moves with the team, measured as notebook 11 (section 6) measures a 
       "neighbour γ {pg50:.1f} → {pg200:.1f} /s, f {pf50:.2f} → {pf200:.2f} m/s². The two that read sums (VGAI's CNN is "
       "trained to read the same sums) push drones that already agree {vfr:.0f}× and {sfr:.0f}× harder in the larger "
       "team; the one that reads means does not. Trained to read means, VGAI did not flock there either (the table "
-      "above): its limit at N' = 200 is not the features' scale alone.",
+      "above): its limit at N' = 200 is not the features' scale alone. At R = 1 m (`--R 1.0`, N = 50) the recipe "
+      "brakes with γ = {vgr:.0f} /s, {vgx:.0f}× its gain at 1.5 m, against f = {vfr1:.2f} m/s²; its variance at 5 s, "
+      "{vvr}, is {over:.0f}× the balance (f/γ)² = {vbal}: what keeps its velocities apart is not a soft brake, for it "
+      "brakes far harder than at 1.5 m and still does not align. The camera is the same at both radii (every drone in view); only the graph its "
+      "messages travel on changed. The DAGNN per neighbour there: γ = {pgr:.1f} /s, f = {pfr:.2f} m/s².",
+      vgr=limr["vgai_depthcam"]["damping_gain_median"], vgx=limr["vgai_depthcam"]["damping_gain_median"] / vg50,
+      vfr1=limr["vgai_depthcam"]["forcing_at_rest_rms_median"],
+      vvr=variance_text(limr["vgai_depthcam"]["velocity_variance_median"]),
+      vbal=variance_text((limr["vgai_depthcam"]["forcing_at_rest_rms_median"] / limr["vgai_depthcam"]["damping_gain_median"]) ** 2),
+      over=limr["vgai_depthcam"]["velocity_variance_median"] / (limr["vgai_depthcam"]["forcing_at_rest_rms_median"]
+                                                                 / limr["vgai_depthcam"]["damping_gain_median"]) ** 2,
+      pgr=limr["dagnn_per_neighbour"]["damping_gain_median"], pfr=limr["dagnn_per_neighbour"]["forcing_at_rest_rms_median"],
       e=lim[200]["episodes"], vg50=vg50, vg200=vg200, vf50=vf50, vf200=vf200, vfr=vf200 / vf50,
       sg50=sg50, sg200=sg200, sf50=sf50, sf200=sf200, sfr=sf200 / sf50,
       pg50=pg50, pg200=pg200, pf50=pf50, pf200=pf200)
