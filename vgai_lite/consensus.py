@@ -1,13 +1,13 @@
 """Did it flock? Velocity consensus late in a flight and the swarm's cohesion, beside the cost.
 
-Introduced in notebook 01. Eq. 1 sums the velocity variance over an
-episode, and most of it accrues in the first steps, where every controller brakes hard; a controller
-whose drones never quite align can still score well. So, beside every relative cost, the book reports:
+Introduced in notebook 01. Eq. 1 sums the velocity variance over an episode, and most of it accrues in the first
+steps, where every controller brakes hard; a controller whose drones never quite align can still score well. So,
+beside every relative cost, the book reports:
 
-  * the velocity variance (1/N) sum_i ||v_i(t) - vbar(t)||^2 (the summand of eq. 1) at t = 0.5, 1, 2
-    and 5 s of flights longer than the training episodes (500 steps), median over episodes;
-  * whether the communication graph (radius R) is connected at the end, and into how many groups
-    it fell apart.
+  * the velocity variance (1/N) sum_i ||v_i(t) - vbar(t)||^2 (the summand of eq. 1) at t = 0.5, 1, 2 and 5 s of
+    flights longer than the training episodes (500 steps), median over episodes;
+  * whether the communication graph (radius R) is connected at the end (into how many groups it fell apart), and
+    whether it was at the start (``connected_at_start``).
 
 Shapes: trajectories (T, B, N, 2).
 """
@@ -34,23 +34,16 @@ def groups(r: torch.Tensor, R: float) -> torch.Tensor:
 
 
 def connected_at_start(cfg: FlockConfig, episodes: int, *, seed: int) -> torch.Tensor:
-    """(episodes,) bool: is the communication graph of radius cfg.R connected at t = 0 in each of the
-    episodes of ``seed`` (the initial conditions ``consensus`` and ``evaluate.relative_cost`` fly)?
-    The initial-state constraints ask every drone for two neighbours, not for one connected graph; a
-    decentralized controller cannot join two groups that start apart except by chance, so the share
-    connected at t = 0 bounds what it can keep connected (the centralized expert hears every drone)."""
+    """(episodes,) bool: the graph of radius cfg.R connected at t = 0 in the episodes of ``seed``? Every drone starts
+    with two neighbours, not one connected graph: the bound on what a decentralized controller keeps connected."""
     r0, _ = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
     return groups(r0, cfg.R) == 1
 
 
 @dataclass
 class Consensus:
-    """A controller's flocking figures on ``episodes`` flights of ``steps`` steps.
-
-    Attributes:
-        times: seconds at which ``variance`` is read; variance (E, len(times)) in m^2/s^2.
-        groups_at_end: (E,) connected components of the communication graph at the last step.
-    """
+    """A controller's flocking figures on ``episodes`` flights of ``steps`` steps. Attributes: ``times``, seconds at
+    which ``variance`` (E, len(times)) in m^2/s^2 is read; ``groups_at_end`` (E,), the graph's components at the end."""
 
     name: str
     times: tuple
@@ -79,15 +72,13 @@ class Consensus:
 
 def consensus(controller, cfg: FlockConfig, episodes: int = 10, *, seed: int,
               times: tuple = CONSENSUS_TIMES, name: str = "") -> Consensus:
-    """Fly ``controller`` from ``episodes`` initial conditions of ``seed`` (no default: say which
-    episodes, as for ``evaluate.relative_cost``) for as long as the last of ``times`` needs, and read
-    its flocking figures."""
+    """Fly ``controller`` from ``episodes`` initial conditions of ``seed`` (no default: say which episodes, as for
+    ``evaluate.relative_cost``) for as long as the last of ``times`` needs, and read its flocking figures."""
     steps = int(round(max(times) / cfg.Ts)) + 1
     if any(t < 0 for t in times):
         raise ValueError(f"times must be >= 0 seconds, got {times}")
     r0, v0 = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
     traj = rollout(controller, cfg, r0, v0, steps=steps)
-    idx = [int(round(t / cfg.Ts)) for t in times]
-    var = velocity_variance(traj.v)[idx].T  # (E, len(times))
+    var = velocity_variance(traj.v)[[int(round(t / cfg.Ts)) for t in times]].T  # (E, len(times))
     return Consensus(name or getattr(controller, "name", type(controller).__name__), tuple(times), var,
                      groups(traj.r[-1], cfg.R))

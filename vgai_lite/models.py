@@ -17,7 +17,6 @@ from torch import nn
 from .features import N_LOCAL_FEATURES
 
 
-
 class AggregationMLP(nn.Module):
     """NN_Theta of eqs. 7-8: the same MLP on every agent's row z_i(t) in R^{KF}, at every time.
 

@@ -651,9 +651,9 @@ prose("More exchanges do not keep the swarm together at R = 1 m: with K − 1 = 
 # ### At R = 1 m: what holds the swarm together
 #
 # The book asks of a controller at $R = 1$ m a swarm connected at 5 s in at least 90 % of episodes.
-# Ten episodes per cell, as above, cannot tell 70 % from 90 %, and the initial conditions
-# set a bound first: they give every drone two neighbours, not one connected graph, so at $R = 1$ m some
-# swarms start in pieces (`consensus.connected_at_start`). A decentralized controller joins two pieces
+# Ten episodes per cell, as above, are too few to tell a share near the target from one well below
+# it, and the initial conditions set a bound first: they give every drone two neighbours, not one
+# connected graph, so at $R = 1$ m some swarms start in pieces (`consensus.connected_at_start`). A decentralized controller joins two pieces
 # only by chance; the expert hears every drone and can steer them together. So on 30 validation episodes
 # (`python tools/experiments/radius_one.py`, its command in the record) we fly the expert, the k-hop
 # oracles of above, and six recipes of the DAGNN per neighbour, each from three training seeds
