@@ -195,8 +195,8 @@ def _per_neighbour_cells(results: dict) -> str:
             f"drone's degree, trained at N = 50 and R = 1.5 m, {seeds} training seeds): at N' = 200 "
             f"{cell('N', 'DAGNN (per neighbour)', '200')}, against the paper's DAGNN's {cell('N', 'DAGNN', '200')}; at R = 1 m "
             f"{cell('R', 'DAGNN (per neighbour)', '1.0')}, against {cell('R', 'DAGNN', '1.0')}; "
-            f"{start_r1:.0%} of these episodes start connected at R = 1 m, the most a decentralized controller can "
-            f"count on (`consensus.connected_at_start`, notebook 03, section 9).")
+            f"{start_r1:.0%} of these test episodes start with a connected graph at R = 1 m "
+            f"(`consensus.connected_at_start`; notebook 03, section 9, flies the DAGNN against that share).")
 
 
 def _how(record: dict) -> str:
