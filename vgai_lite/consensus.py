@@ -35,7 +35,7 @@ def groups(r: torch.Tensor, R: float) -> torch.Tensor:
 
 def connected_at_start(cfg: FlockConfig, episodes: int, *, seed: int) -> torch.Tensor:
     """(episodes,) bool: the graph of radius cfg.R connected at t = 0 in the episodes of ``seed``? Every drone starts
-    with two neighbours, not one connected graph: the bound on what a decentralized controller keeps connected."""
+    with two neighbours, not one connected graph; pieces rejoin only if their motions bring them within cfg.R."""
     r0, _ = sample_initial_state(cfg, episodes, torch.Generator().manual_seed(seed))
     return groups(r0, cfg.R) == 1
 

@@ -10,12 +10,13 @@ within k hops: the most a controller exchanging k times could know) at R = 1 m, 
 chosen here, so never the test episodes), and records per checkpoint the relative cost, the velocity
 variance at 5 s and the share connected at 5 s; per recipe the mean and the spread between its seeds.
 
-The bound: the initial conditions ask every drone for two neighbours, not for one connected graph, and at
-R = 1 m some episodes start in pieces (``consensus.connected_at_start``). The expert hears every drone and
-can steer two groups together; a decentralized controller joins them only by chance. So the record also
-gives, for every controller, the share of the episodes that start connected which it keeps connected.
-With ``--gains``, the first recipe's trainings fly again with their actions scaled (``Scaled``): whether they
-brake too softly to hold the links, and where their delayed exchanges stop a harder braking.
+Which swarms start in one piece: the initial conditions ask every drone for two neighbours, not for one
+connected graph, and at R = 1 m some episodes start in pieces (``consensus.connected_at_start``). Nothing in
+eq. 2 pulls pieces together (its potential acts within rho only); they rejoin only if their first motions bring
+them within R. So the record also gives, for every controller, the share of the episodes that start connected
+which it keeps connected, and how many pieces rejoined.
+With ``--gains``, the first recipe's trainings fly again with their actions scaled (``Scaled``): whether
+braking harder on the same features holds more links.
 Writes ``data/experiments/radius_one.json``.
 """
 

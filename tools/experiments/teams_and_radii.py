@@ -12,8 +12,8 @@ choice, so never the test episodes) at every N' of ``--fly-teams`` (R = 1.5 m) a
 ``--fly-radii`` (N = 50), as ``reproduce.flight_config`` flies the tables' columns. Writes
 ``data/experiments/NAME_teams.json`` (and the checkpoint ``NAME.pt`` when it trains): per cell the
 relative cost with its interval, the velocity variance at 5 s, connectivity at 5 s, closest approaches, and
-the share of episodes whose graph is connected at t = 0 (``consensus.connected_at_start``: the bound a
-decentralized controller faces) with the share of those it keeps connected.
+the share of episodes whose graph is connected at t = 0 (``consensus.connected_at_start``) with the
+share of those it keeps connected.
 ``--test`` flies a controller chosen on them on the test episodes instead (reporting only).
 ``--nearest K`` flies a VGAI with a renderer that draws only each drone's K nearest drones
 (``RenderConfig.nearest``): in a team larger than it trained in, the panorama it trained on.
@@ -88,7 +88,7 @@ def main(argv=None) -> int:
                 render = dataclasses.replace(flown.vision.render, nearest=args.nearest)
                 flown.vision = dataclasses.replace(flown.vision, render=render)
             res = relative_cost(flown, flight, episodes=args.episodes, seed=seed, name=args.name)
-            start = connected_at_start(flight, args.episodes, seed=seed)  # the bound a decentralized controller faces
+            start = connected_at_start(flight, args.episodes, seed=seed)  # which swarms start in one piece
             end = res.flocking.groups_at_end == 1
             print(f"{table} = {column}: {res}; connected at t = 0 in {start.double().mean():.0%}", flush=True)
             out["cells"][f"{table}={column}"] = {"config": {"N": flight.N, "R": flight.R}, **res.summary(),
