@@ -2,6 +2,7 @@
 through it."""
 
 import dataclasses
+import math
 
 import pytest
 import torch
@@ -136,3 +137,48 @@ def test_cameras_without_a_range_error_draw_what_they_drew_before_it_existed():
     g = torch.Generator().manual_seed(5)
     noise, blur = torch.rand(3, generator=g) * 0.1, torch.rand(3, generator=g) * 2.0
     assert torch.equal(a.noise, noise) and torch.equal(a.blur_deg, blur) and torch.equal(a.depth_noise, torch.zeros(3))
+
+
+def test_the_papers_rgb_camera_tells_how_far_a_body_is_from_how_much_of_a_pixel_it_fills():
+    """RGB, the paper's sensor (``render.PALETTE``): each colour channel shows the gray channel's scene in its
+    own colours, gray is the same whether colour is rendered beside it or not, and the camera's exposure and
+    noise act on every colour channel (not on depth). The point of colour: in gray, a near body filling little
+    of a pixel and a farther one filling more can give the same value; in colour, one pixel's three values
+    give both the coverage a and the fog f = exp(-d / fog_distance), hence the distance d."""
+    from vgai_lite.render import PALETTE
+    render = RenderConfig(channels=("red", "green", "blue", "gray", "depth"))
+    img = _frames(render)
+    assert torch.equal(img[:, :, 3:4], _frames(RenderConfig(channels=("gray",))))
+    assert torch.equal(img[:, :, 3:], _frames(RenderConfig()))
+    H, W = render.view_height, render.view_width
+    row = H // 2 - 1                                                   # the sky's side of the horizon
+    y = (row + 0.5 - H / 2) / (H / 2)
+    sky, top_row = torch.tensor([PALETTE[c][0] + PALETTE[c][1] * y for c in ("red", "green", "blue")]), 0
+    assert torch.allclose(img[:, :, :3, top_row].amax(-1).amax((0, 1)),
+                          torch.tensor([PALETTE[c][0] - PALETTE[c][1] * (1 - 1 / H) for c in ("red", "green", "blue")]))
+    horizon = torch.tensor([PALETTE[c][4] for c in ("red", "green", "blue")])
+    body = torch.tensor([PALETTE[c][5] for c in ("red", "green", "blue")])
+    A = torch.stack((horizon - sky, body - horizon), dim=1)           # p - sky = a (horizon - sky) + a f (body - horizon)
+    for d, shift in ((0.6, 0.3), (1.0, 0.5), (1.7, 0.45), (3.0, 0.6)):
+        theta = -math.atan(shift / render.focal)                       # within column W/2 of the front camera
+        r = torch.tensor([[[0.0, 0.0], [d * math.cos(theta), d * math.sin(theta)]]])
+        p = render_egocentric(r, CFG, render)[0, 0, :3, row, W // 2]
+        a, af = torch.linalg.lstsq(A, (p - sky)[:, None]).solution.flatten()
+        assert 0.05 < float(a) <= 1.0
+        d_seen = -render.fog_distance * math.log(float(af / a))
+        assert abs(d_seen - (d - render.body_radius)) < 0.02, (d, d_seen)
+    # in gray, coverage and fog trade off: two (a, f) with one gray value, told apart in colour
+    g = PALETTE["gray"]
+    g_sky, g_h, g_b = g[0] + g[1] * y, g[4], g[5]
+    a1, f1, f2 = 0.5, 0.9, 0.6
+    p1 = a1 * (g_h - g_sky) + a1 * f1 * (g_b - g_h)
+    a2 = p1 / ((g_h - g_sky) + f2 * (g_b - g_h))
+    assert 0 < a2 <= 1
+    c1, c2 = a1 * A[:, 0] + a1 * f1 * A[:, 1], a2 * A[:, 0] + a2 * f2 * A[:, 1]
+    assert float((c1 - c2).abs().max()) > 0.01   # a few hundredths: fog is a weak cue, next to a noise of 0.05
+    gen = lambda: torch.Generator().manual_seed(0)  # noqa: E731
+    noisy = sensor_noise(img, 0.05, gen(), render.channels)
+    assert all(not torch.equal(noisy[:, :, c], img[:, :, c]) for c in range(4))
+    assert torch.equal(noisy[:, :, 4], img[:, :, 4])
+    seen = Camera(CameraRanges(gain=(1.2, 1.2)), render, 2, CFG.N, torch.Generator().manual_seed(2)).frame(img, 3)
+    assert torch.allclose(seen[:, :, :4], (1.2 * img[:, :, :4]).clamp(0, 1)) and torch.equal(seen[:, :, 4], img[:, :, 4])

@@ -10,13 +10,13 @@ degrees of view, so that a setting means the same at every resolution: a column 
 90° / view_width wide, a row vertical_fov_deg / view_height tall. A dead camera shows 0 on its
 quarter of the panorama.
 
-Exposure and sensor noise are photometric: they act on the intensity channel ("gray",
-``PHOTOMETRIC``), the one the paper's drones have. A depth channel (the book's "depth camera",
-D = depth_scale / d) comes from a range sensor, which errs in proportion to the distance it
-measures: d_cam = d exp(depth_noise * n), i.e. D_cam = min(1, D exp(-depth_noise * n)) on the pixels
-that see a body (no return stays 0). Our choice, the paper has no depth: intensity noise of sigma
-added to D = 0.2 / d would be a range error of sigma / D, 50 % at 2 m for sigma = 0.05, where a
-commodity depth camera errs by about 2 %. The lens blur and a dead camera act on every channel.
+Exposure and sensor noise are photometric: they act on the intensity channels ("gray", or the paper's
+"red", "green", "blue"; ``PHOTOMETRIC``; noise independent per channel). A depth channel (the book's
+"depth camera", D = depth_scale / d) comes from a range sensor, which errs in proportion to the distance it
+measures: d_cam = d exp(depth_noise * n), i.e. D_cam = min(1, D exp(-depth_noise * n)) on the pixels that
+see a body (no return stays 0). Our choice, the paper has no depth: intensity noise of sigma added to
+D = 0.2 / d would be a range error of sigma / D, 50 % at 2 m for sigma = 0.05, where a commodity depth
+camera errs by about 2 %. The lens blur and a dead camera act on every channel.
 
 The noise of a frame is drawn from a generator seeded by the frame's time, so that in flight the
 frame a drone took at t - g, paired with the one of t (``vision``), is the very frame it saw then,
@@ -92,7 +92,7 @@ def blur_degrees(img: torch.Tensor, sigma_deg, render: RenderConfig) -> torch.Te
     return gaussian_blur(img, s / dx, s / dy)
 
 
-PHOTOMETRIC = ("gray",)
+PHOTOMETRIC = ("gray", "red", "green", "blue")
 """The channels a photosite measures: exposure and sensor noise act on these; "depth" has its range noise."""
 
 

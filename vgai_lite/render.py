@@ -32,14 +32,15 @@ import torch
 from .config import FlockConfig
 from .flocking import check_state
 
-CHANNELS = ("gray", "depth")
 CAMERAS = ("front", "right", "back", "left")
 
-# Grey levels of the "gray" channel (a camera-like intensity in [0, 1]; our choice, none in the paper):
-SKY_GRAY, SKY_GRADIENT = 0.85, 0.1          # sky at the horizon, and its darkening toward the top
-GROUND_GRAY, GROUND_GRADIENT = 0.55, -0.25  # ground at the horizon, and its darkening toward the bottom
-HORIZON_GRAY = 0.7                          # a body far away fades to this (fog)
-BODY_GRAY = 0.1                             # a body close up
+# Intensity channels in [0, 1] (our choice, none in the paper): sky at the horizon and its darkening upward, ground
+# and its change downward, the horizon's colour far bodies fade to (fog), a body close up. "red", "green", "blue":
+# the paper's RGB (blue sky, green ground, bluish haze, dark red bodies), where fog (how far) and coverage (how
+# much of a pixel a body fills) change a pixel in different directions; in gray, along the same one.
+PALETTE = {"gray": (0.85, 0.1, 0.55, -0.25, 0.7, 0.1), "red": (0.7, 0.1, 0.5, -0.25, 0.72, 0.4),
+           "green": (0.82, 0.1, 0.55, -0.25, 0.76, 0.1), "blue": (0.95, 0.05, 0.35, -0.2, 0.82, 0.05)}
+CHANNELS = (*PALETTE, "depth")
 
 
 @dataclass(frozen=True)
@@ -56,8 +57,8 @@ class RenderConfig:
         body_radius, body_height: each drone's cylinder, in m. The radius is also the physical one
             of the pymunk reference: two bodies touch when their centres are closer than 0.1 m, the
             book's "close call" threshold. Pairs start at least 0.2 m apart.
-        channels: "gray" (a camera-like intensity: sky, ground, bodies darker the nearer they are)
-            and/or "depth" (depth_scale / distance on bodies, 0 elsewhere, capped at 1).
+        channels: "gray" (an intensity: sky, ground, bodies darker the nearer they are) or "red", "green",
+            "blue" (in colour, ``PALETTE``), and/or "depth" (depth_scale / distance on bodies, else 0, at most 1).
         fog_distance: bodies fade toward the horizon's colour with distance, exp(-t / fog_distance).
         depth_scale: distance in m at which the depth channel reads 1.
         topdown_size: pixels per side of the top-down crop.
@@ -240,10 +241,10 @@ def egocentric_depth(r: torch.Tensor, rcfg: RenderConfig = RenderConfig()) -> to
     return column_layers(r, rcfg).hit_depth
 
 
-def _background(rows: torch.Tensor, H: int) -> torch.Tensor:
+def _background(rows: torch.Tensor, H: int, ch: str = "gray") -> torch.Tensor:
     """Sky above the horizon (bright, darker upward), ground below (darker toward the bottom)."""
     y = (rows + 0.5 - H / 2) / (H / 2)  # -1 at the top, +1 at the bottom
-    return torch.where(y < 0, SKY_GRAY + SKY_GRADIENT * y, GROUND_GRAY + GROUND_GRADIENT * y)
+    return torch.where(y < 0, PALETTE[ch][0] + PALETTE[ch][1] * y, PALETTE[ch][2] + PALETTE[ch][3] * y)
 
 
 def render_egocentric(r: torch.Tensor, cfg: FlockConfig, rcfg: RenderConfig = RenderConfig()) -> torch.Tensor:
@@ -268,11 +269,10 @@ def render_egocentric(r: torch.Tensor, cfg: FlockConfig, rcfg: RenderConfig = Re
     a1, a2 = alpha(layers.depth1, layers.cover1), alpha(layers.depth2, layers.cover2)
     out = torch.empty(B, N, len(rcfg.channels), H, Wt, dtype=dt, device=dev)
     for c, ch in enumerate(rcfg.channels):
-        if ch == "gray":
-            bg = _background(rows, H)[:, None].expand(H, Wt)
-            def value(depth):  # dark bodies fading to the horizon's colour with distance
-                fog = torch.exp(-depth / rcfg.fog_distance)
-                return (HORIZON_GRAY + (BODY_GRAY - HORIZON_GRAY) * fog).unsqueeze(2)
+        if ch in PALETTE:
+            bg, (horizon, body) = _background(rows, H, ch)[:, None].expand(H, Wt), PALETTE[ch][4:]
+            def value(depth, horizon=horizon, body=body):  # dark bodies fading to the horizon's colour with distance
+                return (horizon + (body - horizon) * torch.exp(-depth / rcfg.fog_distance)).unsqueeze(2)
         else:
             bg = torch.zeros((), dtype=dt, device=dev).expand(H, Wt)
 
