@@ -17,26 +17,35 @@ share of those it keeps connected.
 ``--test`` flies a controller chosen on them on the test episodes instead (reporting only).
 ``--nearest K`` flies a VGAI with a renderer that draws only each drone's K nearest drones
 (``RenderConfig.nearest``): in a team larger than it trained in, the panorama it trained on.
+``--teacher K`` trains the DAGNN to imitate the K-hop oracle of ``khop_oracle.py`` (the expert's gain on the exact
+mean velocity within K hops, the expert's potential) instead of the centralized expert of eq. 2: a measurement
+of what limits a DAGNN at R = 1 m (a teacher no local controller can follow, or the learner), not the paper's
+method. The checkpoint's own training configuration does not name the teacher; the record does.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import sys
 from pathlib import Path
+from unittest import mock
 
 import torch
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from vgai_lite import DAGNNTrainConfig, FlockConfig, load_controller, relative_cost, train_dagnn  # noqa: E402
 from vgai_lite.book import DATA_DIR, TEST_SEED, VALIDATION_SEED  # noqa: E402
 from vgai_lite.consensus import connected_at_start  # noqa: E402
 from vgai_lite.lab.provenance import Provenance  # noqa: E402
 from vgai_lite.lab.reproduce import ReproduceConfig, flight_config  # noqa: E402
+from vgai_lite import imitation  # noqa: E402
+from khop_oracle import KHopOracle  # noqa: E402
 
 
 def _numbers(text: str, kind):
@@ -58,6 +67,8 @@ def main(argv=None) -> int:
     p.add_argument("--test", action="store_true",
                    help="report a controller chosen before on the test episodes (book.TEST_SEED; writes NAME_teams_test.json)")
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--teacher", type=int, default=None, metavar="K",
+                   help="train the DAGNN on the K-hop oracle's actions (khop_oracle.KHopOracle) instead of the expert's")
     p.add_argument("--nearest", type=int, default=None, metavar="K",
                    help="a VGAI's renderer draws only each drone's K nearest drones (RenderConfig.nearest; "
                         "default: as trained, every drone)")
@@ -74,8 +85,13 @@ def main(argv=None) -> int:
         tcfg = DAGNNTrainConfig(teams=_numbers(args.teams, int), radii=_numbers(args.radii, float),
                                 **{k: v for k, v in (("K", args.K), ("seed", args.seed),
                                                               ("feature_transform", args.feature_transform)) if v is not None})
-        with Provenance(command) as prov:
+        if args.teacher is not None and args.teacher < 1:
+            raise SystemExit(f"--teacher takes the oracle's hops, a whole number >= 1; got {args.teacher}")
+        teacher = (mock.patch.object(imitation, "expert_control", lambda r, v, cfg: KHopOracle(cfg, args.teacher)(r, v))
+                   if args.teacher else contextlib.nullcontext())  # the labels of DAgger's flights (eq. 9's U*)
+        with Provenance(command) as prov, teacher:
             controller, hist = train_dagnn(FlockConfig(), tcfg, checkpoint=ckpt, progress=False)
+        out["teacher"] = f"{args.teacher}-hop oracle (khop_oracle.KHopOracle)" if args.teacher else "the expert (eq. 2)"
         out.update(train_config=tcfg.to_dict(), train_seconds=round(hist["seconds"], 1),
                    round_checks=hist["rounds"], training=prov.record())
     rc, seed = ReproduceConfig(), TEST_SEED if args.test else VALIDATION_SEED
