@@ -305,6 +305,20 @@ def test_02_2_rejects_wrong_answers(answer, why):
     assert not any(passes(check_sym_gso, answer)), why
 
 
+def test_02_2_draws_no_graph_on_which_a_one_sided_normalisation_is_right():
+    """On a graph whose every edge joins two drones of equal degree (a few disjoint pairs, say, which sparse draws of
+    six drones often are), D^-1 A equals D^-1/2 A D^-1/2: the row-normalised answer would pass now and then."""
+    from vgai_lite.graphs import gso
+    from vgai_lite.lab.method_exercises import _random_adjacency
+
+    for seed in range(300):
+        A = _random_adjacency(torch.Generator().manual_seed(seed), 1, 6)  # graph by graph, as a check of one graph would meet it
+        row = A / A.sum(-1).clamp(min=1)[..., None]
+        assert not torch.allclose(row, gso(A, "sym_normalized")), seed
+        assert (A.diagonal(dim1=-2, dim2=-1) == 0).all() and torch.equal(A, A.transpose(1, 2))
+        assert (A.sum(-1) == 0).any(-1).all()  # each graph keeps its isolated drone
+
+
 # ---------------------------------------------------------------------------------------------
 # 03.2: one DAgger round's data aggregation
 

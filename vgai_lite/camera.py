@@ -10,7 +10,7 @@ degrees of view, so that a setting means the same at every resolution: a column 
 90° / view_width wide, a row vertical_fov_deg / view_height tall. A dead camera shows 0 on its
 quarter of the panorama.
 
-Exposure and sensor noise are photometric: they act on the intensity channels ("gray", or the paper's
+Exposure and sensor noise are photometric: they act on the intensity channels ("gray", or AirSim's colour,
 "red", "green", "blue"; ``PHOTOMETRIC``; noise independent per channel). A depth channel (the book's
 "depth camera", D = depth_scale / d) comes from a range sensor, which errs in proportion to the distance it
 measures: d_cam = d exp(depth_noise * n), i.e. D_cam = min(1, D exp(-depth_noise * n)) on the pixels that

@@ -36,7 +36,7 @@ CAMERAS = ("front", "right", "back", "left")
 
 # Intensity channels in [0, 1] (our choice, none in the paper): sky at the horizon and its darkening upward, ground
 # and its change downward, the horizon's colour far bodies fade to (fog), a body close up. "red", "green", "blue":
-# the paper's RGB (blue sky, green ground, bluish haze, dark red bodies), where fog (how far) and coverage (how
+# AirSim's colour (blue sky, green ground, bluish haze, dark red bodies), where fog (how far) and coverage (how
 # much of a pixel a body fills) change a pixel in different directions; in gray, along the same one.
 PALETTE = {"gray": (0.85, 0.1, 0.55, -0.25, 0.7, 0.1), "red": (0.7, 0.1, 0.5, -0.25, 0.72, 0.4),
            "green": (0.82, 0.1, 0.55, -0.25, 0.76, 0.1), "blue": (0.95, 0.05, 0.35, -0.2, 0.82, 0.05)}

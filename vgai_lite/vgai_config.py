@@ -24,8 +24,8 @@ from .render import RenderConfig
 from .vision import VisionConfig
 
 PAPER_VISION = VisionConfig(render=RenderConfig(channels=("gray",)), motion_gap=0)
-"""The paper's sensor: the four cameras' intensity at one instant (its CNN takes one frame; AirSim's
-RGB as one gray channel), no depth channel and no earlier frame."""
+"""The paper's sensor: the four cameras' intensity at one instant (its CNN takes one frame; AirSim's colour
+as one gray channel, colour in ``render.PALETTE``), no depth channel and no earlier frame."""
 
 
 @dataclass(frozen=True)

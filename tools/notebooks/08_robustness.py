@@ -614,7 +614,8 @@ display(Markdown(f"| VGAI (channels) | " + " | ".join(f"σ = {float(x):.3g}" for
 # or lost late, when they differ by a few cm/s. The same heads read on the same late states: flights of
 # the depth camera's VGAI (training seed 0, clean frames) from the validation initial conditions, at
 # four times (`python tools/experiments/estimator_late_flight.py`; the gray-only VGAI with four and
-# with eight DAgger rounds, and with 24 rows per camera instead of 12):
+# with eight DAgger rounds, and with 24 rows per camera instead of 12; the last two rows are the
+# colour trainings of the end of this section):
 
 # %%
 late = json.loads((exp_dir / "estimator_late_flight.json").read_text())
@@ -630,7 +631,7 @@ display(Markdown("| VGAI (channels) | " + " | ".join(f"step {t}" for t in late_t
                  + f"\n\nEach cell: correlation with the exact features of the estimated velocity sums · of the r/r⁴ "
                    f"sums; {late['provenance']['episodes']} validation flights of {late['pilot'].split('/')[-1]}."))
 depth_late = next(e for e in late["checkpoints"].values() if "depth" in e["channels"])
-gray_late = [e for e in late["checkpoints"].values() if "depth" not in e["channels"]]
+gray_late = [e for e in late["checkpoints"].values() if e["channels"] == ["gray"]]  # gray only (the colour ones: below)
 gap = max(vel(depth_late, late_t[-1]) - vel(e, late_t[-1]) for e in gray_late)
 unexplained = lambda e: 1 - pos(e, late_t[-1]) ** 2  # the share of the r/r⁴ sums' variance the head misses
 short = lambda name: name.split("/")[-1]
@@ -703,6 +704,106 @@ display(prose("Its round checks read {checks} after rounds 1 to {n}. On {e} vali
               cost={-1: "cheaper, beyond the intervals", 0: "the intervals overlap",
                     1: "dearer, beyond the intervals"}[compare(long_, short_)],
               flock="flocks" if flocked(long_) else "still does not flock"))
+
+# %% [markdown]
+# **Or does colour help? The paper's RGB sensor.** The paper does not name its channels, but its
+# AirSim cameras deliver colour, and the authors' code reads colour images. In one gray pixel, a near
+# body that fills little of the pixel and a farther one that fills more can give the same value: fog
+# (how far) and coverage (how much) move it along one direction. In colour they move it along
+# different ones (`render.PALETTE`: a blue sky, green ground, a bluish haze far bodies fade to, dark
+# red bodies), so a clean pixel's three values give both
+# (`test_the_papers_rgb_camera_tells_how_far_a_body_is_from_how_much_of_a_pixel_it_fills` recovers a
+# body's distance from one pixel). The difference is small next to the camera's noise, though: a few
+# hundredths of a pixel value. The gray-only trainings above (seeds 0 and 1) were trained again with
+# the red, green and blue channels instead of gray (their motion channels follow), one change:
+# `python tools/experiments/vgai_variant.py --base vgai_F24 --name vgai_camera_narrow_rgb --camera
+# 0,0.05:0,1.4:0.9,1.1:-0.03,0.03:0.05 --channels red,green,blue --threads 1` (and `--seed 1 --name
+# vgai_camera_narrow_rgb_seed1`), the two side by side at one thread each.
+
+# %%
+from vgai_lite.camera import Camera
+from vgai_lite.lab.findings import flock_verdict, one_training, over_seeds, seed_spread
+from vgai_lite.render import RenderConfig, render_egocentric
+
+RGB_RUNS = {"gray only": ["vgai_camera_narrow_gray", "vgai_camera_narrow_gray_seed1"],
+            "RGB": ["vgai_camera_narrow_rgb", "vgai_camera_narrow_rgb_seed1"]}
+rgb_rec = {name: json.loads((exp_dir / f"{name}.json").read_text()) for names in RGB_RUNS.values() for name in names}
+r_show, _ = sample_initial_state(FlockConfig(), 1, torch.Generator().manual_seed(WORKING_SEED))
+colour = RenderConfig(channels=("red", "green", "blue", "gray"))
+clean_view = render_egocentric(r_show, FlockConfig(), colour)
+noisy_view = Camera(CameraRanges(noise=(10 / 255, 10 / 255)), colour, 1, FlockConfig().N,
+                    torch.Generator().manual_seed(0)).frame(clean_view, 0)
+fig, axes = plt.subplots(2, 2, figsize=(14, 2.6))
+for row, (name, view) in enumerate((("clean", clean_view), ("sensor noise σ = 10/255", noisy_view))):
+    axes[row, 0].imshow(view[0, 0, :3].permute(1, 2, 0).clamp(0, 1).numpy(), aspect="auto")
+    axes[row, 1].imshow(view[0, 0, 3].numpy(), cmap="gray", vmin=0, vmax=1, aspect="auto")
+    axes[row, 0].set_ylabel(name, fontsize=8)
+axes[0, 0].set_title("RGB: front, right, back, left cameras"), axes[0, 1].set_title("gray: the same frame")
+for ax in axes.flat:
+    ax.set_xticks([]), ax.set_yticks([])
+plt.tight_layout()
+plt.show()
+display(Markdown("| sensor | training seed | relative cost (95% CI) | variance at 5 s [m²/s²] | connected at 5 s | flocked | "
+                 "training [min] |\n|---|---|---|---|---|---|---|\n" + "\n".join(
+                     f"| {sensor} | {rec['train_config']['seed']} | {rec['relative_cost_mean']:.2f} "
+                     f"({rec['relative_cost_mean_ci95'][0]:.2f}-{rec['relative_cost_mean_ci95'][1]:.2f}) | "
+                     f"{rec['velocity_variance_median']['5s']:.1e} | {rec['share_connected_at_end']:.0%} | "
+                     f"{'yes' if flocked(rec) else '**no**'} | {rec['train_seconds'] / 60:.0f} |"
+                     for sensor, names in RGB_RUNS.items() for rec in (rgb_rec[n] for n in names))
+                 + f"\n\n{rgb_rec[RGB_RUNS['RGB'][0]]['episodes']} validation episodes (seed "
+                   f"{rgb_rec[RGB_RUNS['RGB'][0]]['seed']}); each pair trained side by side at one thread each."))
+grays = [rgb_rec[n] for n in RGB_RUNS["gray only"]]
+rgbs = [rgb_rec[n] for n in RGB_RUNS["RGB"]]
+spread = seed_spread(grays)
+verdicts = [flock_verdict(r, grays) for r in rgbs]
+costs = [compare(one_training(r, spread), over_seeds([g["relative_cost_mean"] for g in grays])) for r in rgbs]
+display(prose("In colour the recipe {flocks} on these validation episodes ({per_seed}). Against the two gray-only trainings, "
+      "by the book's rule for one training against a configuration's seeds: {verdicts}. On cost: {costs} (each colour "
+      "training's interval widened by the gray trainings' spread between seeds, {s:.2f}).",
+      flocks=("flocks in both seeds" if all(flocked(r) for r in rgbs) else
+              "flocks in one seed of two" if any(flocked(r) for r in rgbs) else "does not flock in either seed"),
+      per_seed=", ".join(f"seed {r['train_config']['seed']}: variance {variance_text(r['velocity_variance_median']['5s'])} "
+                         f"m²/s², connected in {r['share_connected_at_end']:.0%}" for r in rgbs),
+      verdicts="; ".join(f"seed {r['train_config']['seed']} " + {-1: "flocks, below every gray seed's variance",
+                                                               0: "lies within the gray seeds' spread",
+                                                               1: "does worse than every gray seed"}[v]
+                         for r, v in zip(rgbs, verdicts)),
+      costs="; ".join(f"seed {r['train_config']['seed']} " + {-1: "lower, intervals apart", 0: "cannot be told apart",
+                                                            1: "higher, intervals apart"}[c]
+                      for r, c in zip(rgbs, costs)),
+      s=spread))
+
+rgb_limit = json.loads((exp_dir / "consensus_limit_rgb.json").read_text())["controllers"]
+rgb_late = {n: late["checkpoints"][f"experiments/{n}"] for n in RGB_RUNS["RGB"]}
+gray0_limit = rgb_limit[RGB_RUNS["gray only"][0]]["5s"]
+prose("What colour changes in what the CNN reads: late in the flight (step {t}) the colour heads read the r/r⁴ sums "
+      "with a correlation of {rl} (seeds 0 and 1), the gray-only head of seed 0 with {gl:.2f}, the depth camera's "
+      "with {dl:.2f}. And in how it acts, at 5 s on the working episodes (`python tools/experiments/consensus_limit.py "
+      "--checkpoints ...`, its command in `consensus_limit_rgb.json`): {acts}; the gray-only training of seed 0 "
+      "brakes with γ = {gg:.2f} /s against f = {gf:.3f} m/s², the depth camera with γ = {dg:.2f} /s against "
+      "f = {df:.3f} m/s². Colour tells a body's distance from its coverage in a clean pixel; {reads} {flock} "
+      "Colour also costs time: the two colour trainings took {rm} min against {gm} min for gray, trained the same way "
+      "(side by side at one thread each). Stage 1 took {r1} min against {g1}; stage 3's forward and backward passes "
+      "through the CNN, whose first layer reads three times the channels, {rf} min (the gray records predate that "
+      "split).",
+      reads=("the trained CNNs read the distances no better for it (no colour head above the gray one's correlation)."
+             if all(pos(e, late_t[-1]) <= pos(late["checkpoints"]["experiments/" + RGB_RUNS["gray only"][0]], late_t[-1])
+                    for e in rgb_late.values())
+             else "one trained CNN reads the distances better for it."),
+      flock=("Neither colour training flocks." if not any(flocked(r) for r in rgbs) else "One colour training flocks."),
+      rm=" and ".join(f"{r['train_seconds'] / 60:.0f}" for r in rgbs),
+      gm=" and ".join(f"{g['train_seconds'] / 60:.0f}" for g in grays),
+      rf=" and ".join(f"{(r['seconds_by_phase']['stage 3: forward (CNN, aggregation, MLP)'] + r['seconds_by_phase']['stage 3: backward and Adam step']) / 60:.0f}" for r in rgbs),
+      r1=" and ".join(f"{r['seconds_by_phase']['stage 1: state estimation'] / 60:.0f}" for r in rgbs),
+      g1=" and ".join(f"{g['stage1_seconds'] / 60:.0f}" for g in grays),
+      t=late_t[-1], rl=", ".join(f"{pos(e, late_t[-1]):.2f}" for e in rgb_late.values()),
+      gl=pos(late["checkpoints"]["experiments/" + RGB_RUNS["gray only"][0]], late_t[-1]), dl=pos(depth_late, late_t[-1]),
+      acts="; ".join(f"colour seed {rgb_rec[n]['train_config']['seed']} brakes with γ = {rgb_limit[n]['5s']['damping_gain_median']:.2f} /s "
+                     f"against a forcing at rest of f = {rgb_limit[n]['5s']['forcing_at_rest_rms_median']:.3f} m/s²"
+                     for n in RGB_RUNS["RGB"]),
+      gg=gray0_limit["damping_gain_median"], gf=gray0_limit["forcing_at_rest_rms_median"],
+      dg=rgb_limit["vgai_depthcam"]["5s"]["damping_gain_median"],
+      df=rgb_limit["vgai_depthcam"]["5s"]["forcing_at_rest_rms_median"])
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world

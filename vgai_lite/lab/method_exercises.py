@@ -31,13 +31,22 @@ from ..vgai_training import bptt_loss, window_action_loss
 # 02.2: the symmetric normalised GSO
 
 def _random_adjacency(g: torch.Generator, B: int, N: int) -> torch.Tensor:
-    """Symmetric 0/1 adjacencies (B, N, N) without self-loops, of mixed degrees, each with an isolated agent."""
-    p = 0.15 + 0.6 * torch.rand(B, 1, 1, generator=g, dtype=torch.float64)
-    A = (torch.rand(B, N, N, generator=g, dtype=torch.float64) < p).double().triu(1)
-    A = A + A.transpose(1, 2)
-    lonely = torch.randint(0, N, (B,), generator=g)
-    A[torch.arange(B), lonely, :] = 0
-    A[torch.arange(B), :, lonely] = 0
+    """Symmetric 0/1 adjacencies (B, N, N) without self-loops, of mixed degrees, each with an isolated agent.
+    Each graph has an edge between two drones of different degrees (drawn again until it has), so that an
+    answer that normalises by one side only, or by rows, cannot pass on a graph where that happens to agree."""
+    A = torch.zeros(B, N, N, dtype=torch.float64)
+    todo = torch.ones(B, dtype=torch.bool)
+    while todo.any():
+        n = int(todo.sum())
+        p = 0.15 + 0.6 * torch.rand(n, 1, 1, generator=g, dtype=torch.float64)
+        a = (torch.rand(n, N, N, generator=g, dtype=torch.float64) < p).double().triu(1)
+        a = a + a.transpose(1, 2)
+        lonely = torch.randint(0, N, (n,), generator=g)
+        a[torch.arange(n), lonely, :] = 0
+        a[torch.arange(n), :, lonely] = 0
+        A[todo] = a
+        deg = A.sum(-1)
+        todo = ~((A > 0) & (deg[:, :, None] != deg[:, None, :])).flatten(1).any(1)
     return A
 
 
