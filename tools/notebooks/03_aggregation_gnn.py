@@ -728,8 +728,8 @@ prose("{start:.0%} of these episodes start connected. The expert ends connected 
 # velocity, which no drone three exchanges away can know; a DAGNN imitating it may learn a blurred
 # compromise. The 3-hop oracle above keeps every swarm that starts connected and uses only what three
 # exchanges could bring. So the recipe *R in [1, 2] m* was trained again with the oracle as its teacher
-# (its actions label DAgger's flights instead of the expert's; `teams_and_radii.py --teacher 3`, not
-# the paper's method, a measurement) from the same three seeds, and both flown on the same
+# (the oracle flies and labels DAgger's flights in the expert's place; `teams_and_radii.py --teacher 3`,
+# not the paper's method, a measurement) from the same three seeds, and both flown on the same
 # validation episodes (`python tools/experiments/radius_one.py ... --out data/experiments/radius_one_teacher.json`,
 # its command in the record):
 
@@ -752,7 +752,11 @@ display(prose("Taught by the 3-hop oracle, the DAGNN is connected at 5 s in {o:.
               verdict={1: "more, the intervals apart", 0: "the two cannot be told apart",
                        -1: "fewer, the intervals apart"}[findings.compare_connected(pooled(by_oracle), pooled(by_expert))],
               meaning={0: "A teacher that a three-exchange controller could follow does not make the DAGNN keep measurably "
-                          "more links: on these episodes, a teacher out of reach does not explain what it loses at R = 1 m.",
+                          "more links; on these episodes we cannot tell whether a teacher out of reach costs it any. Taught "
+                          "by the oracle, it is {vs} the oracle itself ({o3:.0%}).".format(
+                              o3=next(iter(rt["oracles"].values()))["share_connected_at_end"],
+                              vs={1: "above", 0: "not told apart from", -1: "below"}[findings.compare_connected(
+                                  pooled(by_oracle), {**next(iter(rt["oracles"].values())), "episodes": rt["episodes"]})]),
                        -1: "A teacher that a three-exchange controller could follow makes it keep fewer links, so a teacher "
                            "out of reach does not explain what it loses at R = 1 m.",
                        1: "Part of what it loses at R = 1 m is the teacher's: the expert asks for what three exchanges "

@@ -649,10 +649,10 @@ prose("At step {t} the drones differ by {dv:.3f} m/s (median); the depth camera'
                "more than 0.1 below it, so late in the flight the gray-only CNN no longer reads the motion as well."),
       pd=pos(depth_late, late_t[-1]), pg=", ".join(f"{pos(e, late_t[-1]):.2f}" for e in gray_late),
       ratio=", ".join(f"{unexplained(e) / unexplained(depth_late):.1f}" for e in gray_late),
-      rows=("twice the rows (vgai_camera_gray24, the last row) read them no better "
+      rows=("twice the rows (vgai_camera_gray24, the fourth row) read them no better "
             f"({pos(tall, late_t[-1]):.2f}), so a taller image is not the cure either."
             if unexplained(tall) >= min(unexplained(e) for e in gray_late if e is not tall) else
-            f"twice the rows (vgai_camera_gray24, the last row) read them better ({pos(tall, late_t[-1]):.2f})."))
+            f"twice the rows (vgai_camera_gray24, the fourth row) read them better ({pos(tall, late_t[-1]):.2f})."))
 
 # %% [markdown]
 # **Or how the controller acts on what it reads?** The consensus measurement of notebook 11,
@@ -706,24 +706,27 @@ display(prose("Its round checks read {checks} after rounds 1 to {n}. On {e} vali
               flock="flocks" if flocked(long_) else "still does not flock"))
 
 # %% [markdown]
-# **Or does colour help? The paper's RGB sensor.** The paper does not name its channels, but its
-# AirSim cameras deliver colour, and the authors' code reads colour images. In one gray pixel, a near
-# body that fills little of the pixel and a farther one that fills more can give the same value: fog
-# (how far) and coverage (how much) move it along one direction. In colour they move it along
-# different ones (`render.PALETTE`: a blue sky, green ground, a bluish haze far bodies fade to, dark
-# red bodies), so a clean pixel's three values give both
-# (`test_the_papers_rgb_camera_tells_how_far_a_body_is_from_how_much_of_a_pixel_it_fills` recovers a
-# body's distance from one pixel). The difference is small next to the camera's noise, though: a few
-# hundredths of a pixel value. The gray-only trainings above (seeds 0 and 1) were trained again with
-# the red, green and blue channels instead of gray (their motion channels follow), one change:
+# **Or does colour help? RGB, as AirSim renders it.** The paper names no channels; its AirSim
+# cameras render colour. In one gray pixel, a near body that fills little of the pixel and a farther
+# one that fills more can give the same value: fog (how far) and coverage (how much) move it along one
+# direction. In colour they move it along different ones (`render.PALETTE`, our colours: a blue sky,
+# green ground, a bluish haze far bodies fade to, dark red bodies), so a clean pixel's three values
+# give both (`test_the_papers_rgb_camera_tells_how_far_a_body_is_from_how_much_of_a_pixel_it_fills`
+# recovers a body's distance from one pixel). How large that difference is, next to the camera's
+# noise, is computed below. The gray-only trainings above (seeds 0 and 1) were trained again with the
+# red, green and blue channels instead of gray, one change; the motion channel is then taken per
+# colour, so the CNN reads six channels instead of two:
 # `python tools/experiments/vgai_variant.py --base vgai_F24 --name vgai_camera_narrow_rgb --camera
 # 0,0.05:0,1.4:0.9,1.1:-0.03,0.03:0.05 --channels red,green,blue --threads 1` (and `--seed 1 --name
-# vgai_camera_narrow_rgb_seed1`), the two side by side at one thread each.
+# vgai_camera_narrow_rgb_seed1`), the two side by side at one thread each. The figure shows what drone
+# 0 of a working episode sees at the start, in colour and in gray, through a clean camera and through
+# the authors' test noise: in colour the near bodies are dark red, the far ones fade into the haze;
+# in gray both are one shade of darker.
 
 # %%
 from vgai_lite.camera import Camera
 from vgai_lite.lab.findings import flock_verdict, one_training, over_seeds, seed_spread
-from vgai_lite.render import RenderConfig, render_egocentric
+from vgai_lite.render import PALETTE as COLOURS, RenderConfig, render_egocentric
 
 RGB_RUNS = {"gray only": ["vgai_camera_narrow_gray", "vgai_camera_narrow_gray_seed1"],
             "RGB": ["vgai_camera_narrow_rgb", "vgai_camera_narrow_rgb_seed1"]}
@@ -733,16 +736,24 @@ colour = RenderConfig(channels=("red", "green", "blue", "gray"))
 clean_view = render_egocentric(r_show, FlockConfig(), colour)
 noisy_view = Camera(CameraRanges(noise=(10 / 255, 10 / 255)), colour, 1, FlockConfig().N,
                     torch.Generator().manual_seed(0)).frame(clean_view, 0)
-fig, axes = plt.subplots(2, 2, figsize=(14, 2.6))
-for row, (name, view) in enumerate((("clean", clean_view), ("sensor noise σ = 10/255", noisy_view))):
+fig, axes = plt.subplots(2, 2, figsize=(14, 2.8))
+for row, (name, view) in enumerate((("clean", clean_view), ("σ = 10/255", noisy_view))):
     axes[row, 0].imshow(view[0, 0, :3].permute(1, 2, 0).clamp(0, 1).numpy(), aspect="auto")
     axes[row, 1].imshow(view[0, 0, 3].numpy(), cmap="gray", vmin=0, vmax=1, aspect="auto")
     axes[row, 0].set_ylabel(name, fontsize=8)
-axes[0, 0].set_title("RGB: front, right, back, left cameras"), axes[0, 1].set_title("gray: the same frame")
+axes[0, 0].set_title("drone 0 in colour: front, right, back, left cameras"), axes[0, 1].set_title("the same frame in gray")
 for ax in axes.flat:
-    ax.set_xticks([]), ax.set_yticks([])
+    ax.set_xticks([colour.view_width * c - 0.5 for c in range(1, 4)]), ax.set_xticklabels([]), ax.set_yticks([])
+    ax.grid(axis="x", color="white", lw=0.8)
 plt.tight_layout()
 plt.show()
+# the cue itself: two pixels on the sky's side of the horizon with one gray value, a near body covering a = 0.5 of the
+# pixel (fog f = exp(-d / fog distance) = 0.9) and a farther one covering more (f = 0.6); how far apart they are in colour
+y_h = (colour.view_height // 2 - 0.5 - colour.view_height / 2) / (colour.view_height / 2)
+pix = lambda ch, a, f: (COLOURS[ch][0] + COLOURS[ch][1] * y_h) * (1 - a) + a * (COLOURS[ch][4] + f * (COLOURS[ch][5] - COLOURS[ch][4]))
+sky_g = COLOURS["gray"][0] + COLOURS["gray"][1] * y_h
+a_far = (pix("gray", 0.5, 0.9) - sky_g) / (COLOURS["gray"][4] - sky_g + 0.6 * (COLOURS["gray"][5] - COLOURS["gray"][4]))
+gap = max(abs(pix(ch, 0.5, 0.9) - pix(ch, a_far, 0.6)) for ch in ("red", "green", "blue"))
 display(Markdown("| sensor | training seed | relative cost (95% CI) | variance at 5 s [m²/s²] | connected at 5 s | flocked | "
                  "training [min] |\n|---|---|---|---|---|---|---|\n" + "\n".join(
                      f"| {sensor} | {rec['train_config']['seed']} | {rec['relative_cost_mean']:.2f} "
@@ -751,59 +762,77 @@ display(Markdown("| sensor | training seed | relative cost (95% CI) | variance a
                      f"{'yes' if flocked(rec) else '**no**'} | {rec['train_seconds'] / 60:.0f} |"
                      for sensor, names in RGB_RUNS.items() for rec in (rgb_rec[n] for n in names))
                  + f"\n\n{rgb_rec[RGB_RUNS['RGB'][0]]['episodes']} validation episodes (seed "
-                   f"{rgb_rec[RGB_RUNS['RGB'][0]]['seed']}); each pair trained side by side at one thread each."))
+                   f"{rgb_rec[RGB_RUNS['RGB'][0]]['seed']}). Every training ran at one thread beside another "
+                   "one-thread job: the colour pair side by side, the gray ones on other days, at earlier commits."))
 grays = [rgb_rec[n] for n in RGB_RUNS["gray only"]]
 rgbs = [rgb_rec[n] for n in RGB_RUNS["RGB"]]
 spread = seed_spread(grays)
 verdicts = [flock_verdict(r, grays) for r in rgbs]
 costs = [compare(one_training(r, spread), over_seeds([g["relative_cost_mean"] for g in grays])) for r in rgbs]
-display(prose("In colour the recipe {flocks} on these validation episodes ({per_seed}). Against the two gray-only trainings, "
-      "by the book's rule for one training against a configuration's seeds: {verdicts}. On cost: {costs} (each colour "
-      "training's interval widened by the gray trainings' spread between seeds, {s:.2f}).",
-      flocks=("flocks in both seeds" if all(flocked(r) for r in rgbs) else
-              "flocks in one seed of two" if any(flocked(r) for r in rgbs) else "does not flock in either seed"),
-      per_seed=", ".join(f"seed {r['train_config']['seed']}: variance {variance_text(r['velocity_variance_median']['5s'])} "
-                         f"m²/s², connected in {r['share_connected_at_end']:.0%}" for r in rgbs),
-      verdicts="; ".join(f"seed {r['train_config']['seed']} " + {-1: "flocks, below every gray seed's variance",
-                                                               0: "lies within the gray seeds' spread",
-                                                               1: "does worse than every gray seed"}[v]
-                         for r, v in zip(rgbs, verdicts)),
-      costs="; ".join(f"seed {r['train_config']['seed']} " + {-1: "lower, intervals apart", 0: "cannot be told apart",
-                                                            1: "higher, intervals apart"}[c]
-                      for r, c in zip(rgbs, costs)),
-      s=spread))
+g_var = sorted(g["velocity_variance_median"]["5s"] for g in grays)
+g_con = sorted(g["share_connected_at_end"] for g in grays)
+display(prose("The colour cue, computed from the palette: two pixels with one gray value (a near body covering half of it, "
+              "a farther one covering more) differ in colour by {gap:.3f} at most, against a training noise σ of up to "
+              "{smax:g}. In colour the recipe {flocks} on these validation episodes ({per_seed}). Against the two gray-only "
+              "trainings, by the book's rule for one training against a configuration's seeds: {verdicts}. On cost: "
+              "{costs} (each colour training's interval widened by the gray trainings' spread between seeds, {s:.2f}). "
+              "These comparisons can hardly separate anything: the gray seeds themselves span {v0} to {v1} m²/s² and "
+              "{c0:.0%} to {c1:.0%} connected, one of them flying apart.",
+              gap=gap, smax=CameraRanges.from_dict(rgbs[0]["train_config"]["camera"]).noise[1],
+              flocks=("flocks in both seeds" if all(flocked(r) for r in rgbs) else
+                      "flocks in one seed of two" if any(flocked(r) for r in rgbs) else "does not flock in either seed"),
+              per_seed=", ".join(f"seed {r['train_config']['seed']}: variance {variance_text(r['velocity_variance_median']['5s'])} "
+                                 f"m²/s², connected in {r['share_connected_at_end']:.0%}" for r in rgbs),
+              verdicts="; ".join(f"seed {r['train_config']['seed']} " + {-1: "flocks, below every gray seed's variance",
+                                                                       0: "lies within the gray seeds' spread",
+                                                                       1: "does worse than every gray seed"}[v]
+                                 for r, v in zip(rgbs, verdicts)),
+              costs="; ".join(f"seed {r['train_config']['seed']} " + {-1: "lower, intervals apart", 0: "cannot be told apart",
+                                                                    1: "higher, intervals apart"}[c]
+                              for r, c in zip(rgbs, costs)),
+              s=spread, v0=variance_text(g_var[0]), v1=variance_text(g_var[-1]), c0=g_con[0], c1=g_con[-1]))
 
 rgb_limit = json.loads((exp_dir / "consensus_limit_rgb.json").read_text())["controllers"]
 rgb_late = {n: late["checkpoints"][f"experiments/{n}"] for n in RGB_RUNS["RGB"]}
 gray0_limit = rgb_limit[RGB_RUNS["gray only"][0]]["5s"]
-prose("What colour changes in what the CNN reads: late in the flight (step {t}) the colour heads read the r/r⁴ sums "
-      "with a correlation of {rl} (seeds 0 and 1), the gray-only head of seed 0 with {gl:.2f}, the depth camera's "
-      "with {dl:.2f}. And in how it acts, at 5 s on the working episodes (`python tools/experiments/consensus_limit.py "
-      "--checkpoints ...`, its command in `consensus_limit_rgb.json`): {acts}; the gray-only training of seed 0 "
-      "brakes with γ = {gg:.2f} /s against f = {gf:.3f} m/s², the depth camera with γ = {dg:.2f} /s against "
-      "f = {df:.3f} m/s². Colour tells a body's distance from its coverage in a clean pixel; {reads} {flock} "
-      "Colour also costs time: the two colour trainings took {rm} min against {gm} min for gray, trained the same way "
-      "(side by side at one thread each). Stage 1 took {r1} min against {g1}; stage 3's forward and backward passes "
-      "through the CNN, whose first layer reads three times the channels, {rf} min (the gray records predate that "
-      "split).",
-      reads=("the trained CNNs read the distances no better for it (no colour head above the gray one's correlation)."
-             if all(pos(e, late_t[-1]) <= pos(late["checkpoints"]["experiments/" + RGB_RUNS["gray only"][0]], late_t[-1])
-                    for e in rgb_late.values())
-             else "one trained CNN reads the distances better for it."),
-      flock=("Neither colour training flocks." if not any(flocked(r) for r in rgbs) else "One colour training flocks."),
-      rm=" and ".join(f"{r['train_seconds'] / 60:.0f}" for r in rgbs),
-      gm=" and ".join(f"{g['train_seconds'] / 60:.0f}" for g in grays),
-      rf=" and ".join(f"{(r['seconds_by_phase']['stage 3: forward (CNN, aggregation, MLP)'] + r['seconds_by_phase']['stage 3: backward and Adam step']) / 60:.0f}" for r in rgbs),
-      r1=" and ".join(f"{r['seconds_by_phase']['stage 1: state estimation'] / 60:.0f}" for r in rgbs),
-      g1=" and ".join(f"{g['stage1_seconds'] / 60:.0f}" for g in grays),
-      t=late_t[-1], rl=", ".join(f"{pos(e, late_t[-1]):.2f}" for e in rgb_late.values()),
-      gl=pos(late["checkpoints"]["experiments/" + RGB_RUNS["gray only"][0]], late_t[-1]), dl=pos(depth_late, late_t[-1]),
-      acts="; ".join(f"colour seed {rgb_rec[n]['train_config']['seed']} brakes with γ = {rgb_limit[n]['5s']['damping_gain_median']:.2f} /s "
-                     f"against a forcing at rest of f = {rgb_limit[n]['5s']['forcing_at_rest_rms_median']:.3f} m/s²"
-                     for n in RGB_RUNS["RGB"]),
-      gg=gray0_limit["damping_gain_median"], gf=gray0_limit["forcing_at_rest_rms_median"],
-      dg=rgb_limit["vgai_depthcam"]["5s"]["damping_gain_median"],
-      df=rgb_limit["vgai_depthcam"]["5s"]["forcing_at_rest_rms_median"])
+gray0_late = late["checkpoints"]["experiments/" + RGB_RUNS["gray only"][0]]
+dead = [n for n, e in rgb_late.items() if min(abs(x) for x in e["correlation"][late_t[-1]][2:4]) < 0.1]  # a head that reads nothing
+acts = []
+for n in RGB_RUNS["RGB"]:
+    x = rgb_limit[n]["5s"]
+    acts.append(f"colour seed {rgb_rec[n]['train_config']['seed']} brakes with γ = {x['damping_gain_median']:.2f} /s "
+                f"({side(x['damping_gain_median_ci95'], gray0_limit['damping_gain_median_ci95'], ('harder than', 'as hard as', 'more weakly than'))} "
+                f"gray) against a forcing at rest of f = {x['forcing_at_rest_rms_median']:.3f} m/s² (pushing "
+                f"{side(x['forcing_at_rest_rms_median_ci95'], gray0_limit['forcing_at_rest_rms_median_ci95'], ('harder than', 'as hard as', 'less than'))} gray)")
+display(prose("What colour changes in what the CNN reads: late in the flight (step {t}) the colour heads read the r/r⁴ sums "
+              "with a correlation of {rl} (seeds 0 and 1, mean of x and y), the gray-only head of seed 0 with {gl:.2f}, the "
+              "depth camera's with {dl:.2f}. {dead}And in how it acts, at 5 s on the working episodes, measured again for "
+              "this comparison in one run (`consensus_limit_rgb.json`, its command in the record; the gray and depth "
+              "figures differ a little from those above, from the other run, and the gray one's interval is wide): "
+              "{acts}; the gray-only training of seed 0 brakes with γ = {gg:.2f} /s against f = {gf:.3f} m/s², the depth "
+              "camera with γ = {dg:.2f} /s against f = {df:.3f} m/s² (each compared by the book's rule, the bootstrap "
+              "intervals of the medians). Colour tells a body's distance from its coverage in a clean pixel; {reads} {flock} "
+              "Colour also costs time: the two colour trainings took {rm} min against {gm} min for gray (all at one "
+              "thread beside another job, not timed under the same conditions). Stage 1 took {r1} min against {g1}; "
+              "stage 3's forward and backward passes through the CNN, whose first layer reads three times the channels, "
+              "{rf} min (the gray records predate that split).",
+              t=late_t[-1], rl=", ".join(f"{pos(e, late_t[-1]):.2f}" for e in rgb_late.values()),
+              gl=pos(gray0_late, late_t[-1]), dl=pos(depth_late, late_t[-1]),
+              dead="".join(f"The head of {n} reads nothing of one of the two sums (its correlation with r_y/r⁴ or r_x/r⁴ "
+                           f"below 0.1 in magnitude): it does not see its neighbours' distances along one axis. " for n in dead),
+              acts="; ".join(acts),
+              gg=gray0_limit["damping_gain_median"], gf=gray0_limit["forcing_at_rest_rms_median"],
+              dg=rgb_limit["vgai_depthcam"]["5s"]["damping_gain_median"],
+              df=rgb_limit["vgai_depthcam"]["5s"]["forcing_at_rest_rms_median"],
+              reads=("the trained CNNs read the distances no better for it (no colour head above the gray one's correlation)."
+                     if all(pos(e, late_t[-1]) <= pos(gray0_late, late_t[-1]) for e in rgb_late.values())
+                     else "one trained CNN reads the distances better for it."),
+              flock=("Neither colour training flocks." if not any(flocked(r) for r in rgbs) else "One colour training flocks."),
+              rm=" and ".join(f"{r['train_seconds'] / 60:.0f}" for r in rgbs),
+              gm=" and ".join(f"{g['train_seconds'] / 60:.0f}" for g in grays),
+              rf=" and ".join(f"{(r['seconds_by_phase']['stage 3: forward (CNN, aggregation, MLP)'] + r['seconds_by_phase']['stage 3: backward and Adam step']) / 60:.0f}" for r in rgbs),
+              r1=" and ".join(f"{r['seconds_by_phase']['stage 1: state estimation'] / 60:.0f}" for r in rgbs),
+              g1=" and ".join(f"{g['stage1_seconds'] / 60:.0f}" for g in grays)))
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world
