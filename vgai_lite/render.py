@@ -268,20 +268,17 @@ def render_egocentric(r: torch.Tensor, cfg: FlockConfig, rcfg: RenderConfig = Re
 
     a1, a2 = alpha(layers.depth1, layers.cover1), alpha(layers.depth2, layers.cover2)
     out = torch.empty(B, N, len(rcfg.channels), H, Wt, dtype=dt, device=dev)
+    fog = [torch.exp(-d / rcfg.fog_distance).unsqueeze(2) for d in (layers.depth2, layers.depth1)] \
+        if any(ch in PALETTE for ch in rcfg.channels) else None  # once for every intensity channel
     for c, ch in enumerate(rcfg.channels):
-        if ch in PALETTE:
+        if ch in PALETTE:  # dark bodies fading to the horizon's colour with distance
             bg, (horizon, body) = _background(rows, H, ch)[:, None].expand(H, Wt), PALETTE[ch][4:]
-            def value(depth, horizon=horizon, body=body):  # dark bodies fading to the horizon's colour with distance
-                return (horizon + (body - horizon) * torch.exp(-depth / rcfg.fog_distance)).unsqueeze(2)
+            far, near = (horizon + (body - horizon) * f for f in fog)
         else:
             bg = torch.zeros((), dtype=dt, device=dev).expand(H, Wt)
-
-            def value(depth):
-                return (rcfg.depth_scale / depth).clamp(max=1).unsqueeze(2)
-
+            far, near = ((rcfg.depth_scale / d).clamp(max=1).unsqueeze(2) for d in (layers.depth2, layers.depth1))
         # front-to-back compositing: background, then the second layer, then the nearest one
-        far = torch.lerp(bg, value(layers.depth2), a2)
-        torch.lerp(far, value(layers.depth1), a1, out=out[:, :, c])
+        torch.lerp(torch.lerp(bg, far, a2), near, a1, out=out[:, :, c])
     return out
 
 
