@@ -79,6 +79,10 @@ def main(argv=None) -> int:
                    help="team sizes the training's swarms fly with, drawn per group (VGAITrainConfig.teams)")
     p.add_argument("--radii", default=None, metavar="LOW,HIGH",
                    help="the range of communication radii R (m) drawn per group (VGAITrainConfig.radii)")
+    p.add_argument("--cnn-widths", default=None, metavar="C1,C2",
+                   help="channels of the CNN's two stages (VGAITrainConfig.cnn_widths; the book's: 8,16)")
+    p.add_argument("--cnn-hidden", type=int, default=None,
+                   help="width of the CNN's hidden FC layer (VGAITrainConfig.cnn_hidden; the book's: 64)")
     p.add_argument("--feature-means", action="store_true",
                    help="the CNN learns the local features as means over neighbours (VGAITrainConfig.feature_means)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
@@ -93,7 +97,10 @@ def main(argv=None) -> int:
     changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
-                                 ("learner_swarms", args.learner_swarms)) if v is not None}
+                                 ("learner_swarms", args.learner_swarms), ("cnn_hidden", args.cnn_hidden))
+               if v is not None}
+    if args.cnn_widths is not None:
+        changes["cnn_widths"] = tuple(int(c) for c in args.cnn_widths.split(","))
     if args.warm_starts is not None:
         changes["warm_starts"] = args.warm_starts == "on"
     if args.feature_means:
