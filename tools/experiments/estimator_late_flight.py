@@ -36,11 +36,13 @@ from vgai_lite.state_estimation import estimator_quality  # noqa: E402
 TIMES = (20, 60, 120, 190)
 CHECKPOINTS = ("experiments/vgai_depthcam", "experiments/vgai_camera_narrow_gray", "experiments/vgai_camera_gray_rounds8",
                "experiments/vgai_camera_gray24", "experiments/vgai_camera_narrow_rgb",
-               "experiments/vgai_camera_narrow_rgb_seed1")
+               "experiments/vgai_camera_narrow_rgb_seed1", "experiments/vgai_camera_narrow_gray_cnn16",
+               "experiments/vgai_camera_narrow_gray_cnn16_seed1")
 """The depth-camera VGAI (the book's recipe through the camera, seed 0) and the gray-only ones (the same
 recipe and camera without the depth channel; 4 and 8 DAgger rounds; and 24 rows per camera instead of 12:
 does a taller image, a finer apparent size, read distances better?), then the same recipe in colour (red, green,
-blue instead of gray; training seeds 0 and 1): does colour, which tells fog from coverage, read them better?"""
+blue instead of gray; training seeds 0 and 1): does colour, which tells fog from coverage, read them better? Last,
+the gray-only recipe with a CNN twice as wide (16 and 32 channels; seeds 0 and 1): does capacity read them better?"""
 
 
 def main(argv=None) -> int:

@@ -614,8 +614,8 @@ display(Markdown(f"| VGAI (channels) | " + " | ".join(f"σ = {float(x):.3g}" for
 # or lost late, when they differ by a few cm/s. The same heads read on the same late states: flights of
 # the depth camera's VGAI (training seed 0, clean frames) from the validation initial conditions, at
 # four times (`python tools/experiments/estimator_late_flight.py`; the gray-only VGAI with four and
-# with eight DAgger rounds, and with 24 rows per camera instead of 12; the last two rows are the
-# colour trainings of the end of this section):
+# with eight DAgger rounds, and with 24 rows per camera instead of 12; the last four rows are the
+# colour trainings and the wider CNNs of the end of this section):
 
 # %%
 late = json.loads((exp_dir / "estimator_late_flight.json").read_text())
@@ -631,7 +631,8 @@ display(Markdown("| VGAI (channels) | " + " | ".join(f"step {t}" for t in late_t
                  + f"\n\nEach cell: correlation with the exact features of the estimated velocity sums · of the r/r⁴ "
                    f"sums; {late['provenance']['episodes']} validation flights of {late['pilot'].split('/')[-1]}."))
 depth_late = next(e for e in late["checkpoints"].values() if "depth" in e["channels"])
-gray_late = [e for e in late["checkpoints"].values() if e["channels"] == ["gray"]]  # gray only (the colour ones: below)
+gray_late = [e for name, e in late["checkpoints"].items()  # gray only, the book's CNN (colour, wider CNNs: below)
+             if e["channels"] == ["gray"] and "cnn16" not in name]
 gap = max(vel(depth_late, late_t[-1]) - vel(e, late_t[-1]) for e in gray_late)
 unexplained = lambda e: 1 - pos(e, late_t[-1]) ** 2  # the share of the r/r⁴ sums' variance the head misses
 short = lambda name: name.split("/")[-1]
@@ -833,6 +834,163 @@ display(prose("What colour changes in what the CNN reads: late in the flight (st
               rf=" and ".join(f"{(r['seconds_by_phase']['stage 3: forward (CNN, aggregation, MLP)'] + r['seconds_by_phase']['stage 3: backward and Adam step']) / 60:.0f}" for r in rgbs),
               r1=" and ".join(f"{r['seconds_by_phase']['stage 1: state estimation'] / 60:.0f}" for r in rgbs),
               g1=" and ".join(f"{g['stage1_seconds'] / 60:.0f}" for g in grays)))
+
+# %% [markdown]
+# **Or is the CNN too small?** The CNN that reads these frames is small: two convolution stages of 8
+# and 16 channels and a hidden layer of 64 (`VGAITrainConfig.cnn_widths`, `cnn_hidden`; notebook 05).
+# Without depth a neighbour's distance lives in how much of a few pixels it covers, a finer reading
+# than its bearing. The gray-only trainings above (seeds 0 and 1) were trained again with the two
+# convolution stages twice as wide, 16 and 32 channels, one change:
+# `python tools/experiments/vgai_variant.py --base vgai_F24 --name vgai_camera_narrow_gray_cnn16 --camera
+# 0,0.05:0,1.4:0.9,1.1:-0.03,0.03:0.05 --channels gray --cnn-widths 16,32 --threads 1` (and `--seed 1
+# --name vgai_camera_narrow_gray_cnn16_seed1`), the two side by side at one thread each. Beside them,
+# the eight-round training above, and what each reads and how it acts, measured on the same states as
+# above (`estimator_late_flight.py`; `consensus_limit.py`, its command in `consensus_limit_camera.json`).
+
+# %%
+WIDE_RUNS = {"8, 16 (the book's)": RGB_RUNS["gray only"], "8, 16, eight DAgger rounds": ["vgai_camera_gray_rounds8"],
+             "16, 32": ["vgai_camera_narrow_gray_cnn16", "vgai_camera_narrow_gray_cnn16_seed1"]}
+wide_rec = {n: json.loads((exp_dir / f"{n}.json").read_text()) for names in WIDE_RUNS.values() for n in names}
+cam_limit2 = json.loads((exp_dir / "consensus_limit_camera.json").read_text())["controllers"]
+late_cell = lambda n: (f"{pos(late['checkpoints'][f'experiments/{n}'], late_t[-1]):.2f}"
+                       if f"experiments/{n}" in late["checkpoints"] else "–")
+display(Markdown("| CNN channels | training seed | relative cost (95% CI) | variance at 5 s [m²/s²] | connected at 5 s | "
+                 "flocked | reads r/r⁴ (step " + late_t[-1] + ") | γ at 5 s [1/s] | f at rest [m/s²] | training [min] |\n"
+                 "|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(
+                     f"| {widths} | {r['train_config']['seed']} | {r['relative_cost_mean']:.2f} "
+                     f"({r['relative_cost_mean_ci95'][0]:.2f}-{r['relative_cost_mean_ci95'][1]:.2f}) | "
+                     f"{r['velocity_variance_median']['5s']:.1e} | {r['share_connected_at_end']:.0%} | "
+                     f"{'yes' if flocked(r) else '**no**'} | {late_cell(n)} | "
+                     + (f"{cam_limit2[n]['5s']['damping_gain_median']:.2f} | {cam_limit2[n]['5s']['forcing_at_rest_rms_median']:.3f} | "
+                        if n in cam_limit2 else "– | – | ") +
+                     f"{r['train_seconds'] / 60:.0f} |"
+                     for widths, names in WIDE_RUNS.items() for n in names for r in (wide_rec[n],))
+                 + f"\n| depth camera (gray + depth; 8, 16) | 0 | | | | | {pos(depth_late, late_t[-1]):.2f} | "
+                   f"{cam_limit2['vgai_depthcam']['5s']['damping_gain_median']:.2f} | "
+                   f"{cam_limit2['vgai_depthcam']['5s']['forcing_at_rest_rms_median']:.3f} | |"
+                 + f"\n\n{wide_rec[WIDE_RUNS['16, 32'][0]]['episodes']} validation episodes (seed "
+                   f"{wide_rec[WIDE_RUNS['16, 32'][0]]['seed']}); γ and f at 5 s on the working episodes, all in one run "
+                   "(–: not measured). "
+                   "Every training ran at one thread beside another job."))
+wides = [wide_rec[n] for n in WIDE_RUNS["16, 32"]]
+wide_costs = [compare(one_training(r, spread), over_seeds([g["relative_cost_mean"] for g in grays])) for r in wides]
+f_of = lambda n: cam_limit2[n]["5s"]["forcing_at_rest_rms_median_ci95"]
+g_of = lambda n: cam_limit2[n]["5s"]["damping_gain_median_ci95"]
+display(prose("With twice the channels the gray-only recipe {flocks} ({per_seed}). Against the two trainings of the book's "
+              "width, by the book's rule for one training against a configuration's seeds: {verdicts}; on cost: {costs}. "
+              "What it reads: late in the flight the wider heads read the r/r⁴ sums with {wr}, the book's width with "
+              "{gr}, the depth camera with {dr:.2f}. {wide_reads}How it acts: {acts} (each against the book's width, seed 0, by the "
+              "book's rule on the bootstrap intervals). The eight-round training pushes {r8f} at rest than four rounds "
+              "(f = {r8:.3f} against {g0:.3f} m/s²) and brakes {r8g} (γ = {r8gam:.2f} against {g0gam:.2f} /s), yet "
+              "{r8flock}. The twice-wider trainings took {wm} min (one thread, beside each other) against {gm} for the "
+              "book's width.",
+              flocks=("flocks in both seeds" if all(flocked(r) for r in wides) else
+                      "flocks in one seed of two" if any(flocked(r) for r in wides) else "does not flock in either seed"),
+              per_seed=", ".join(f"seed {r['train_config']['seed']}: {r['relative_cost_mean']:.2f}, variance "
+                                 f"{variance_text(r['velocity_variance_median']['5s'])} m²/s², connected in "
+                                 f"{r['share_connected_at_end']:.0%}" for r in wides),
+              verdicts="; ".join(f"seed {r['train_config']['seed']} " + {-1: "flocks, below every gray seed's variance",
+                                                                       0: "lies within their spread",
+                                                                       1: "does worse than every one of them"}[flock_verdict(r, grays)]
+                                 for r in wides),
+              costs="; ".join(f"seed {r['train_config']['seed']} " + {-1: "lower, intervals apart", 0: "cannot be told apart",
+                                                                    1: "higher, intervals apart"}[c]
+                              for r, c in zip(wides, wide_costs)),
+              wide_reads="".join(
+                  f"The head of {n} reads little of one of the two sums (its correlation with r_x/r⁴ or r_y/r⁴ below 0.3 in magnitude). "
+                  if min(abs(x) for x in late["checkpoints"][f"experiments/{n}"]["correlation"][late_t[-1]][2:4]) < 0.3 else
+                  f"The head of {n} reads them as well as the depth camera's (within 0.01) and {'flocks' if flocked(wide_rec[n]) else 'does not flock'}: "
+                  + ("reading the distances is not what the gray camera lacks. " if not flocked(wide_rec[n]) else "")
+                  if pos(late["checkpoints"][f"experiments/{n}"], late_t[-1]) >= pos(depth_late, late_t[-1]) - 0.01 else ""
+                  for n in WIDE_RUNS["16, 32"]),
+              wr=", ".join(late_cell(n) for n in WIDE_RUNS["16, 32"]),
+              gr=", ".join(late_cell(n) for n in WIDE_RUNS["8, 16 (the book's)"]), dr=pos(depth_late, late_t[-1]),
+              acts="; ".join(f"seed {wide_rec[n]['train_config']['seed']} brakes with γ = "
+                             f"{cam_limit2[n]['5s']['damping_gain_median']:.2f} /s "
+                             f"({side(g_of(n), g_of(RGB_RUNS['gray only'][0]), ('harder', 'as hard', 'more weakly'))}) against "
+                             f"f = {cam_limit2[n]['5s']['forcing_at_rest_rms_median']:.3f} m/s² (pushing "
+                             f"{side(f_of(n), f_of(RGB_RUNS['gray only'][0]), ('harder', 'as hard', 'less'))})"
+                             for n in WIDE_RUNS["16, 32"]),
+              r8f=side(f_of("vgai_camera_gray_rounds8"), f_of(RGB_RUNS["gray only"][0]), ("harder", "as hard", "less")),
+              r8=cam_limit2["vgai_camera_gray_rounds8"]["5s"]["forcing_at_rest_rms_median"],
+              g0=cam_limit2[RGB_RUNS["gray only"][0]]["5s"]["forcing_at_rest_rms_median"],
+              r8g=side(g_of("vgai_camera_gray_rounds8"), g_of(RGB_RUNS["gray only"][0]), ("harder", "as hard", "more weakly")),
+              r8gam=cam_limit2["vgai_camera_gray_rounds8"]["5s"]["damping_gain_median"],
+              g0gam=cam_limit2[RGB_RUNS["gray only"][0]]["5s"]["damping_gain_median"],
+              r8flock="it flocks" if flocked(wide_rec["vgai_camera_gray_rounds8"]) else "it does not flock either",
+              wm=" and ".join(f"{r['train_seconds'] / 60:.0f}" for r in wides),
+              gm=" and ".join(f"{g['train_seconds'] / 60:.0f}" for g in grays)))
+
+# %% [markdown]
+# **Or does the joint training lose what stage 1 read?** Every recipe above begins with stage 1: the
+# CNN alone learns to read the six local features from its frames (notebook 05). Each recipe's CNN at
+# the end of that stage, before the joint training moves it, read on the same late states as above,
+# and flown as a *modular pilot*: its six estimated features fed to the DAGNN's MLP, which was trained
+# on the exact ones (notebook 04; `estimator_in_the_loop.VisionDAGNN`), on clean frames of the working
+# episodes, with γ and f measured as above (`python tools/experiments/stage1_capacity.py --threads 2
+# --motion-gaps 20,50`; a stage 1 a training left in the book's cache is read from it, the others are
+# trained there). A drone sees a neighbour's motion in the difference of two frames g steps apart
+# (notebook 05's motion channel): across the line of sight as a shift of columns, along it only as a
+# change of the neighbour's apparent size and fog, which a depth channel reads directly as a change
+# of range. Over g steps a radial motion changes the apparent size by little; an older second frame
+# makes the change larger, and older. The last rows are the gray recipe of seed 0 with its second frame
+# older than g = 5 steps.
+
+# %%
+cap = json.loads((exp_dir / "stage1_capacity.json").read_text())
+cap_t = str(cap["times"][-1])
+mod = lambda x: x["modular_pilot"]["5s"]
+g2 = lambda x: f"{round(x, 2) + 0.0:.2f}"  # two decimals, no "-0.00"
+display(Markdown("| recipe | CNN parameters | g [steps] | stage 1 [min] | reads the velocity sums | reads the r/r⁴ sums | "
+                 "modular pilot: variance at 5 s [m²/s²] | γ [1/s] | f at rest [m/s²] |\n|---|---|---|---|---|---|---|---|---|\n"
+                 + "\n".join(f"| {label} | {x['parameters']:,} | {x['motion_gap']} | {x['stage1_seconds'] / 60:.0f} | "
+                             f"{sum(x['correlation'][cap_t][:2]) / 2:.3f} | {sum(x['correlation'][cap_t][2:4]) / 2:.3f} | "
+                             f"{variance_text(mod(x)['velocity_variance_median'])} | {g2(mod(x)['damping_gain_median'])} | "
+                             f"{mod(x)['forcing_at_rest_rms_median']:.3f} |" for label, x in cap["recipes"].items())
+                 + f"\n\nThe CNNs at the end of stage 1, read at step {cap_t} of {cap['provenance']['episodes']} validation "
+                   f"flights of {cap['pilot'].split('/')[-1]} (correlation with the exact features, mean of x and y); "
+                   "their modular pilots fly the working episodes. Stage 1's minutes are each training's own (most at one "
+                   "thread beside another job), not timed alike."))
+caps = cap["recipes"]
+by_record = lambda rec, g=5: next(x for x in caps.values() if x["record"] == rec and x["motion_gap"] == g)
+c_depth, c_gray = by_record("vgai_depthcam"), by_record("vgai_camera_narrow_gray")
+c_gaps = [x for x in caps.values() if x["motion_gap"] != 5]
+vel_s1 = lambda x: sum(x["correlation"][cap_t][:2]) / 2
+pos_s1 = lambda x: sum(x["correlation"][cap_t][2:4]) / 2
+gray_s1 = [x for x in caps.values() if x["channels"] == ["gray"] and x["motion_gap"] == 5]
+display(prose("At the end of stage 1 the gray CNNs read the r/r⁴ sums with {gp} and the depth camera's with {dp:.3f}: "
+              "{dist} After the joint training the book's gray CNN reads them with {after:.2f} (the table above). {lost}The "
+              "velocity sums: the gray CNNs read them with {gv}, the depth camera's with {dv:.3f}. "
+              "Flown as a modular pilot, the depth camera's stage 1 {dflock} (variance {dvar} m²/s² at 5 s, γ = {dg:.2f} /s, "
+              "f = {df:.3f} m/s²); the gray ones of g = 5 brake with γ of {gg} /s and {gflock}{weak} {gaps}",
+              gp=", ".join(f"{pos_s1(x):.3f}" for x in gray_s1), dp=pos_s1(c_depth),
+              dist=("from gray frames, at this resolution and with the book's width (seed 0), the distances are read within "
+                    "0.01 of the depth camera's, so neither the image nor the CNN's size is short of them."
+                    if pos_s1(c_gray) >= pos_s1(c_depth) - 0.01 else
+                    "the book's gray CNN reads them less well than the depth camera's, by more than 0.01."),
+              after=pos(late["checkpoints"]["experiments/vgai_camera_narrow_gray"], late_t[-1]),
+              lost="".join(f"The wider CNN of seed {x['seed']} reads little of one sum already at the end of stage 1 "
+                           f"({min(abs(c) for c in x['correlation'][cap_t][2:4]):.2f}): what its trained head misses, stage 1 "
+                           "missed first. " for x in gray_s1 if min(abs(c) for c in x["correlation"][cap_t][2:4]) < 0.3),
+              gv=", ".join(f"{vel_s1(x):.3f}" for x in gray_s1), dv=vel_s1(c_depth),
+              dflock="flocks" if mod(c_depth)["velocity_variance_median"] <= FLOCKED_VARIANCE else "does not flock",
+              dvar=variance_text(mod(c_depth)["velocity_variance_median"]), dg=mod(c_depth)["damping_gain_median"],
+              df=mod(c_depth)["forcing_at_rest_rms_median"],
+              gg=", ".join(f"{mod(x)['damping_gain_median']:.2f}" for x in gray_s1),
+              gflock=("none flocks" if all(mod(x)["velocity_variance_median"] > FLOCKED_VARIANCE for x in gray_s1) else
+                      "some flock"),
+              weak=(": the six features a gray stage 1 reads do not fly the DAGNN's MLP to a flock, where the depth camera's "
+                    "do. By 2 s their swarms already disagree with a variance of {} m²/s² (the depth camera's: {}), so their γ "
+                    "and f are measured in swarms that no longer flock.".format(
+                        ", ".join(variance_text(x["modular_pilot"]["2s"]["velocity_variance_median"]) for x in gray_s1),
+                        variance_text(c_depth["modular_pilot"]["2s"]["velocity_variance_median"]))
+                    if all(mod(x)["velocity_variance_median"] > FLOCKED_VARIANCE for x in gray_s1) else "."),
+              gaps=" ".join(
+                  f"With the second frame {x['motion_gap']} steps old, the gray stage 1 reads the velocity sums with "
+                  f"{vel_s1(x):.3f}, and its modular pilot brakes with γ = {g2(mod(x)['damping_gain_median'])} /s "
+                  f"({side(x['modular_pilot']['5s']['damping_gain_median_ci95'], c_gray['modular_pilot']['5s']['damping_gain_median_ci95'], ('harder than', 'as hard as', 'more weakly than'))} "
+                  f"at g = 5, by the book's rule) and {'flocks' if mod(x)['velocity_variance_median'] <= FLOCKED_VARIANCE else 'does not flock'} "
+                  f"(variance {variance_text(mod(x)['velocity_variance_median'])} m²/s²)." for x in c_gaps)))
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world

@@ -1,0 +1,142 @@
+"""Experiment: stage 1 alone. Does a wider CNN, or colour, read the distances better before any joint training?
+
+    python tools/experiments/stage1_capacity.py --out data/experiments/stage1_capacity.json
+
+The camera-only VGAIs of notebook 08 do not flock; what limits them, measured, is a forcing at rest several
+times the depth camera's (``consensus_limit*.json``), with the r/r⁴ sums (eq. 9's collision-avoidance
+features) read less well late in a flight (``estimator_late_flight.json``). Those heads were read after the
+joint training (stage 3) had moved the CNN. Here each recipe's CNN is read at the END OF STAGE 1 (visual
+state estimation alone, ``vgai_training.fit_state_estimator``), the stage whose only task is reading the
+six local features: is a CNN of 8 and 16 channels too small to read distances from gray frames, or is the
+gray image itself short of them?
+
+Each recipe is a training record's own configuration (its ``train_config``, so the stage 1 is the very one
+that training trained first). Its stage 1 is read from the book's cache of first
+stages (``runs.STAGE1_CACHE``, ``lab.stage1_cache``) where a training left it, else trained here exactly as
+``train_vgai`` trains it (the expert's flights of round 0, then stage 1; written to the cache), and the run
+stops there. Every CNN is then read on the same states as ``estimator_late_flight.py``: flights of the
+depth-camera VGAI (clean frames) from validation initial conditions, at t = 20, 60, 120 and 190 steps.
+
+And each is flown as a modular pilot: its six estimated local features fed to the shipped DAGNN's MLP (trained on
+the exact ones; ``estimator_in_the_loop.VisionDAGNN``), on clean frames of the working episodes, with the
+damping gain and forcing at rest of ``consensus_limit.py``. A stage-1 CNN whose modular pilot flocks reads
+enough from its frames for a controller that acts on the local features as the DAGNN does; where the joint
+training's VGAI of the same frames does not flock, what fails is the end-to-end training, not the sensor.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+import torch
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from vgai_lite import FlockConfig, VGAITrainConfig, load_controller, train_vgai  # noqa: E402
+from vgai_lite.book import DATA_DIR, VALIDATION_SEED, WORKING_SEED  # noqa: E402
+from vgai_lite.features import FEATURE_NAMES  # noqa: E402
+from vgai_lite.lab.provenance import Provenance, sha256  # noqa: E402
+from vgai_lite.lab.runs import STAGE1_CACHE  # noqa: E402
+from vgai_lite.lab.stage1_cache import cached, stage1_file  # noqa: E402
+from vgai_lite.state_estimation import estimator_quality  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from consensus_limit import damping_and_forcing  # noqa: E402
+from estimator_in_the_loop import VisionDAGNN  # noqa: E402
+
+TIMES = (20, 60, 120, 190)
+RECIPES = {
+    "gray + depth, 8 and 16 channels (vgai_depthcam)": "vgai_depthcam",
+    "gray, 8 and 16 channels (vgai_camera_narrow_gray)": "vgai_camera_narrow_gray",
+    "gray, 16 and 32 channels (vgai_camera_narrow_gray_cnn16)": "vgai_camera_narrow_gray_cnn16",
+    "gray, 16 and 32 channels, seed 1 (vgai_camera_narrow_gray_cnn16_seed1)": "vgai_camera_narrow_gray_cnn16_seed1",
+    "red, green, blue, 8 and 16 channels (vgai_camera_narrow_rgb)": "vgai_camera_narrow_rgb",
+}
+"""label -> the training record whose configuration (``train_config``) it is."""
+GAP_RECORD = "vgai_camera_narrow_gray"
+"""The recipe ``--motion-gaps`` varies: the gray-only camera of seed 0, its motion frame g steps old instead of 5."""
+
+
+class _StageOneDone(Exception):
+    """Raised by the stage-1 function below to end a training once its stage 1 is done."""
+
+    def __init__(self, cnn, record):
+        super().__init__("stage 1 done")
+        self.cnn, self.record = cnn, record
+
+
+def stage_one(cfg: FlockConfig, tcfg: VGAITrainConfig):
+    """(the CNN at the end of stage 1 of ``train_vgai(cfg, tcfg)``, its stage-1 record): read from the cache, or
+    trained as that training trains it (and cached)."""
+    read = cached(STAGE1_CACHE)
+
+    def stop_after(cnn, cfg_, tcfg_, flights, gen, progress=True):
+        raise _StageOneDone(cnn, read(cnn, cfg_, tcfg_, flights, gen, progress))
+
+    try:
+        train_vgai(cfg, tcfg, progress=False, stage1=stop_after)
+    except _StageOneDone as done:
+        return done.cnn.eval(), done.record
+    raise RuntimeError("train_vgai returned without running stage 1 (warm_starts off?)")
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--pilot", default="experiments/vgai_depthcam", help="the VGAI whose flights are read (under data/)")
+    p.add_argument("--episodes", type=int, default=8)
+    p.add_argument("--motion-gaps", type=lambda x: [int(g) for g in x.split(",") if g], default=[], metavar="G1,G2",
+                   help="also the gray recipe of seed 0 with its motion frame G steps old (stage 1 trained here, about 8 min each)")
+    p.add_argument("--flights", type=int, default=10, help="working episodes each modular pilot flies")
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--out", default=str(DATA_DIR / "experiments" / "stage1_capacity.json"))
+    args = p.parse_args(argv)
+    torch.set_num_threads(args.threads)
+    cfg = FlockConfig()
+    command = " ".join(["python tools/experiments/stage1_capacity.py"] + (argv or sys.argv[1:]))
+    pilot = load_controller(DATA_DIR / f"{args.pilot}.pt")
+    dagnn_path = DATA_DIR / "dagnn" / "dagnn_K4.pt"
+    dagnn = load_controller(dagnn_path)
+    out = {"command": command, "pilot": args.pilot, "dagnn": "dagnn/dagnn_K4", "flights_seed": WORKING_SEED, "features": list(FEATURE_NAMES), "times": list(TIMES), "recipes": {}}
+    with Provenance(command) as prov:
+        recipes = [(label, record, None) for label, record in RECIPES.items()] + [
+            (f"gray, 8 and 16 channels, motion frame {g} steps old ({GAP_RECORD}, g = {g})", GAP_RECORD, g)
+            for g in args.motion_gaps]
+        for label, record, gap in recipes:
+            tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
+            if gap is not None:
+                tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=gap))
+            was_cached = stage1_file(STAGE1_CACHE, cfg, tcfg).is_file()
+            start = time.perf_counter()
+            cnn, rec = stage_one(cfg, tcfg)
+            q = estimator_quality(cnn, tcfg.vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED,
+                                  pilot=pilot)
+            out["recipes"][label] = {
+                "record": record, "motion_gap": tcfg.vision.motion_gap, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
+                "seed": tcfg.seed, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
+                "stage1_sha256": sha256(stage1_file(STAGE1_CACHE, cfg, tcfg)),
+                "read_from_cache": was_cached, "stage1_seconds": round(rec["stage1_seconds"], 1),
+                "parameters": sum(x.numel() for x in cnn.parameters()),
+                "final_loss": round(sum(rec["warm_loss"][-100:]) / len(rec["warm_loss"][-100:]), 4),
+                "seconds_here": round(time.perf_counter() - start, 1),
+                "correlation": {str(t): [round(c, 3) for c in q[t]] for t in TIMES},
+                "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision), cfg, args.flights)}
+            m = out["recipes"][label]["modular_pilot"]["5s"]
+            print(label, {t: [round(c, 2) for c in q[t][2:4]] for t in TIMES}, f"modular pilot at 5 s: variance "
+                  f"{m['velocity_variance_median']:.2e}, gamma {m['damping_gain_median']:.2f}, f {m['forcing_at_rest_rms_median']:.3f}",
+                  flush=True)
+    out["provenance"] = prov.record(seed=VALIDATION_SEED, episodes=args.episodes,
+                                    checkpoints={f"data/{args.pilot}.pt": sha256(DATA_DIR / f"{args.pilot}.pt"),
+                                                 "data/dagnn/dagnn_K4.pt": sha256(dagnn_path)})
+    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
+    print("wrote", args.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
