@@ -1131,6 +1131,8 @@ else:
 # * Perturb one stage of the pipeline at a time, with seeded draws and a size-0 case that is bit-identical
 #   to the clean flight: then a degradation curve means what it says.
 # * Judge robustness as everything else: cost, flocking and safety together, on the same episodes.
+# * When a learned pipeline fails, read each stage where it ends and fly it in the loop: a CNN that reads
+#   the distances as well as another's does not, for that, fly as well (section 6's stage 1 and modular pilots).
 #
 # ## What's next
 #
