@@ -20,7 +20,7 @@ import json
 from IPython.display import Markdown, display
 
 from vgai_lite.book import DATA_DIR, TEST_SEED, prose
-from vgai_lite.evaluate import as_safe_as_expert, flocked
+from vgai_lite.evaluate import FLOCKED_VARIANCE, as_safe_as_expert, flocked
 from vgai_lite.lab.paper import PAPER
 from vgai_lite.lab.reproduce import load_results
 from vgai_lite.lab.findings import compare, flock_verdict, needs, noise_that_breaks, one_training, seed_spread
@@ -252,6 +252,13 @@ expert_200 = load("experiments/expert_stability.json")["teams"]["200"]
 does = lambda rec: "does" if flocked(rec) else "does not"
 pn_n, dg_n = ({c: results["tables"]["N"]["rows"][row][f"{c:g}"] for c in n_cols} for row in ("DAGNN (per neighbour)", "DAGNN"))
 pn_r1 = results["tables"]["R"]["rows"]["DAGNN (per neighbour)"]["1.0"]
+stage1 = load("experiments/stage1_capacity.json")["recipes"].values()  # notebook 08: each CNN at the end of stage 1
+s1_gray, s1_depth = (next(x for x in stage1 if x["record"] == chosen_camera_runs()[k] and x["motion_gap"] == 5)
+                     for k in ("gray only", "gray + depth"))
+late_read = lambda x: x["correlation"][str(max(map(int, x["correlation"])))]  # the latest step read
+s1_pos = lambda x: sum(late_read(x)[2:4]) / 2  # the r/r^4 sums, mean of x and y
+s1_vel = lambda x: sum(late_read(x)[:2]) / 2  # the velocity sums
+does_mod = lambda x: "does" if x["modular_pilot"]["5s"]["velocity_variance_median"] <= FLOCKED_VARIANCE else "does not"
 items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "
     f"the gray channel only, trained on clean frames, it {does(gray)} (variance at 5 s "
@@ -261,8 +268,12 @@ items = [
     f"{cams['gray only']['clean']['velocity_variance_median']['5s']:.1e} m²/s², connected in "
     f"{cams['gray only']['clean']['share_connected_at_end']:.0%}; trained from a second seed, "
     f"{cams_seed1['clean']['relative_cost_mean']:.2f}, variance {cams_seed1['clean']['velocity_variance_median']['5s']:.1e}, "
-    f"connected in {cams_seed1['clean']['share_connected_at_end']:.0%}). A CNN that reads its neighbours from gray images "
-    "as well as the depth channel gives them is an open problem.",
+    f"connected in {cams_seed1['clean']['share_connected_at_end']:.0%}). What it lacks, measured (notebook 08, section 6; "
+    "`data/experiments/stage1_capacity.json`): at the end of stage 1 the gray CNN reads its neighbours' r/r⁴ sums with "
+    f"{s1_pos(s1_gray):.3f} against the depth camera's {s1_pos(s1_depth):.3f}, their velocity sums with {s1_vel(s1_gray):.3f} "
+    f"against {s1_vel(s1_depth):.3f}; flown with the DAGNN's own MLP, the gray reading {does_mod(s1_gray)} flock (variance at "
+    f"5 s {s1_gray['modular_pilot']['5s']['velocity_variance_median']:.1e} m²/s²), the depth camera's {does_mod(s1_depth)} "
+    f"({s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}). A camera-only VGAI that flocks is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
     + verdict_at(1) + " (variance at 5 s " + ", ".join(f"{n_vgai[c]['velocity_variance_median']['5s']:.1e} m²/s² at N' = {c:g}"
