@@ -1,6 +1,6 @@
 """Experiment: stage 1 alone. Does a wider CNN, or colour, read the distances better before any joint training?
 
-    python tools/experiments/stage1_capacity.py --out data/experiments/stage1_capacity.json
+    python tools/experiments/stage1_capacity.py --threads 2 --motion-gaps 20,50 --view-widths 64
 
 The camera-only VGAIs of notebook 08 do not flock; what limits them, measured, is a forcing at rest several
 times the depth camera's (``consensus_limit*.json``), with the r/r⁴ sums (eq. 9's collision-avoidance
@@ -60,7 +60,9 @@ RECIPES = {
 }
 """label -> the training record whose configuration (``train_config``) it is."""
 GAP_RECORD = "vgai_camera_narrow_gray"
-"""The recipe ``--motion-gaps`` varies: the gray-only camera of seed 0, its motion frame g steps old instead of 5."""
+"""The recipe ``--motion-gaps`` and ``--view-widths`` vary: the gray-only camera of seed 0, its motion frame g steps old
+instead of 5, or W columns per camera instead of 32 (a neighbour's apparent width, the cue to its motion along the
+line of sight, resolved more finely)."""
 
 
 class _StageOneDone(Exception):
@@ -92,6 +94,8 @@ def main(argv=None) -> int:
     p.add_argument("--episodes", type=int, default=8)
     p.add_argument("--motion-gaps", type=lambda x: [int(g) for g in x.split(",") if g], default=[], metavar="G1,G2",
                    help="also the gray recipe of seed 0 with its motion frame G steps old (stage 1 trained here, about 8 min each)")
+    p.add_argument("--view-widths", type=lambda x: [int(w) for w in x.split(",") if w], default=[], metavar="W1,W2",
+                   help="also the gray recipe of seed 0 with W columns per camera instead of its 32 (finer apparent sizes)")
     p.add_argument("--flights", type=int, default=10, help="working episodes each modular pilot flies")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default=str(DATA_DIR / "experiments" / "stage1_capacity.json"))
@@ -104,20 +108,25 @@ def main(argv=None) -> int:
     dagnn = load_controller(dagnn_path)
     out = {"command": command, "pilot": args.pilot, "dagnn": "dagnn/dagnn_K4", "flights_seed": WORKING_SEED, "features": list(FEATURE_NAMES), "times": list(TIMES), "recipes": {}}
     with Provenance(command) as prov:
-        recipes = [(label, record, None) for label, record in RECIPES.items()] + [
-            (f"gray, 8 and 16 channels, motion frame {g} steps old ({GAP_RECORD}, g = {g})", GAP_RECORD, g)
-            for g in args.motion_gaps]
-        for label, record, gap in recipes:
+        recipes = [(label, record, {}) for label, record in RECIPES.items()] + [
+            (f"gray, 8 and 16 channels, motion frame {g} steps old ({GAP_RECORD}, g = {g})", GAP_RECORD, {"motion_gap": g})
+            for g in args.motion_gaps] + [
+            (f"gray, 8 and 16 channels, {w} columns per camera ({GAP_RECORD}, {w} columns)", GAP_RECORD, {"view_width": w})
+            for w in args.view_widths]
+        for label, record, change in recipes:
             tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
-            if gap is not None:
-                tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=gap))
+            if "motion_gap" in change:
+                tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=change["motion_gap"]))
+            if "view_width" in change:
+                render = dataclasses.replace(tcfg.vision.render, view_width=change["view_width"])
+                tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
             was_cached = stage1_file(STAGE1_CACHE, cfg, tcfg).is_file()
             start = time.perf_counter()
             cnn, rec = stage_one(cfg, tcfg)
             q = estimator_quality(cnn, tcfg.vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED,
                                   pilot=pilot)
             out["recipes"][label] = {
-                "record": record, "motion_gap": tcfg.vision.motion_gap, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
+                "record": record, "motion_gap": tcfg.vision.motion_gap, "view_width": tcfg.vision.render.view_width, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
                 "seed": tcfg.seed, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
                 "stage1_sha256": sha256(stage1_file(STAGE1_CACHE, cfg, tcfg)),
                 "read_from_cache": was_cached, "stage1_seconds": round(rec["stage1_seconds"], 1),

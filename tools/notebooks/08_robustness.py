@@ -932,13 +932,14 @@ display(prose("With twice the channels the gray-only recipe {flocks} ({per_seed}
 # and flown as a *modular pilot*: its six estimated features fed to the DAGNN's MLP, which was trained
 # on the exact ones (notebook 04; `estimator_in_the_loop.VisionDAGNN`), on clean frames of the working
 # episodes, with γ and f measured as above (`python tools/experiments/stage1_capacity.py --threads 2
-# --motion-gaps 20,50`; a stage 1 a training left in the book's cache is read from it, the others are
+# --motion-gaps 20,50 --view-widths 64`; a stage 1 a training left in the book's cache is read from it, the others are
 # trained there). A drone sees a neighbour's motion in the difference of two frames g steps apart
 # (notebook 05's motion channel): across the line of sight as a shift of columns, along it only as a
 # change of the neighbour's apparent size and fog, which a depth channel reads directly as a change
 # of range. Over g steps a radial motion changes the apparent size by little; an older second frame
-# makes the change larger, and older. The last rows are the gray recipe of seed 0 with its second frame
-# older than g = 5 steps.
+# makes the change larger, and older; more columns per camera resolve the apparent size more finely.
+# The last rows are the gray recipe of seed 0 with its second frame older than g = 5 steps, and with 64
+# columns per camera instead of 32.
 
 # %%
 cap = json.loads((exp_dir / "stage1_capacity.json").read_text())
@@ -955,12 +956,16 @@ display(Markdown("| recipe | CNN parameters | g [steps] | reads the velocity sum
                    f"flights of {cap['pilot'].split('/')[-1]} (correlation with the exact features, mean of x and y); "
                    "their modular pilots fly the working episodes, and γ and f are measured at 5 s of each one's own flight."))
 caps = cap["recipes"]
-by_record = lambda rec, g=5: next(x for x in caps.values() if x["record"] == rec and x["motion_gap"] == g)
+base_vision = cam_train[chosen["gray only"]]["train_config"]["vision"]  # the recipe the last rows vary
+base_g, base_w = base_vision["motion_gap"], base_vision["render"]["view_width"]
+as_trained = lambda x: x["motion_gap"] == base_g and x["view_width"] == base_w
+by_record = lambda rec: next(x for x in caps.values() if x["record"] == rec and as_trained(x))
 c_depth, c_gray = by_record("vgai_depthcam"), by_record("vgai_camera_narrow_gray")
-c_gaps = [x for x in caps.values() if x["motion_gap"] != 5]
+c_gaps = [x for x in caps.values() if x["motion_gap"] != base_g]
+c_cols = [x for x in caps.values() if x["view_width"] != base_w]
 vel_s1 = lambda x: sum(x["correlation"][cap_t][:2]) / 2
 pos_s1 = lambda x: sum(x["correlation"][cap_t][2:4]) / 2
-gray_s1 = [x for x in caps.values() if x["channels"] == ["gray"] and x["motion_gap"] == 5]
+gray_s1 = [x for x in caps.values() if x["channels"] == ["gray"] and as_trained(x)]
 miss = lambda rho: 1 - rho ** 2  # the share of a feature's variance a reading misses (the late-flight table's measure)
 trained = {n: cam_limit2[n]["5s"] for n in cam_limit2 if n != "vgai_depthcam"}
 like_depth = [n for n in WIDE_RUNS["16, 32"] if not flocked(wide_rec[n])
@@ -1017,7 +1022,13 @@ display(prose("At the end of stage 1 the gray CNNs read the r/r⁴ sums with {gp
                   f"{vel_s1(x):.3f}, and its modular pilot brakes with γ = {g2(mod(x)['damping_gain_median'])} /s "
                   f"({side(x['modular_pilot']['5s']['damping_gain_median_ci95'], c_gray['modular_pilot']['5s']['damping_gain_median_ci95'], ('harder than', 'as hard as', 'more weakly than'))} "
                   f"at g = 5, by the book's rule) and {'flocks' if mod(x)['velocity_variance_median'] <= FLOCKED_VARIANCE else 'does not flock'} "
-                  f"(variance {variance_text(mod(x)['velocity_variance_median'])} m²/s²)." for x in c_gaps)))
+                  f"(variance {variance_text(mod(x)['velocity_variance_median'])} m²/s²)." for x in c_gaps)
+                   + "".join(
+                  f" With {x['view_width']} columns per camera instead of {base_w}, the gray stage 1 reads the velocity sums with "
+                  f"{vel_s1(x):.3f}, and its modular pilot brakes with γ = {g2(mod(x)['damping_gain_median'])} /s "
+                  f"({side(x['modular_pilot']['5s']['damping_gain_median_ci95'], c_gray['modular_pilot']['5s']['damping_gain_median_ci95'], ('harder than', 'as hard as', 'more weakly than'))} "
+                  f"with {base_w}, by the book's rule) and {'flocks' if mod(x)['velocity_variance_median'] <= FLOCKED_VARIANCE else 'does not flock'} "
+                  f"(variance {variance_text(mod(x)['velocity_variance_median'])} m²/s²)." for x in c_cols)))
 
 # %% [markdown]
 # **Too weak, or only too small?** Where a cue is weak, a least-squares estimate shrinks toward zero:

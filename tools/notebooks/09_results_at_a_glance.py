@@ -253,7 +253,9 @@ does = lambda rec: "does" if flocked(rec) else "does not"
 pn_n, dg_n = ({c: results["tables"]["N"]["rows"][row][f"{c:g}"] for c in n_cols} for row in ("DAGNN (per neighbour)", "DAGNN"))
 pn_r1 = results["tables"]["R"]["rows"]["DAGNN (per neighbour)"]["1.0"]
 stage1 = load("experiments/stage1_capacity.json")["recipes"].values()  # notebook 08: each CNN at the end of stage 1
-s1_gray, s1_depth = (next(x for x in stage1 if x["record"] == chosen_camera_runs()[k] and x["motion_gap"] == 5)
+gray_rec_vision = load(f"experiments/{gray_name}.json")["train_config"]["vision"]  # the recipe as trained (the depth one alike)
+trained_as = lambda x: x["motion_gap"] == gray_rec_vision["motion_gap"] and x["view_width"] == gray_rec_vision["render"]["view_width"]
+s1_gray, s1_depth = (next(x for x in stage1 if x["record"] == chosen_camera_runs()[k] and trained_as(x))
                      for k in ("gray only", "gray + depth"))
 late_read = lambda x: x["correlation"][str(max(map(int, x["correlation"])))]  # the latest step read
 s1_pos = lambda x: sum(late_read(x)[2:4]) / 2  # the r/r^4 sums, mean of x and y
