@@ -12,7 +12,7 @@ from vgai_lite.aggregation import aggregation_sequence
 from vgai_lite.checkpoints import load_estimator, save_estimator
 from vgai_lite.graphs import adjacency, gso
 from vgai_lite.learned_controllers import VGAIController
-from vgai_lite.models import AggregationMLP, OddMotionCNN, ResidualBlock, VGAIModel, VisualCNN
+from vgai_lite.models import AggregationMLP, OddMotionCNN, ResidualBlock, VGAIModel, VisualCNN, cnn_from_spec
 from vgai_lite.render import RenderConfig
 from vgai_lite.camera import CameraRanges
 from vgai_lite.vgai_config import VGAITrainConfig
@@ -383,8 +383,40 @@ def test_motion_features_vanish_when_nothing_moves_and_flip_with_the_motion():
     assert cnn.estimate_local_features(still.flatten(0, 1))[:, :2].abs().max() < 1e-9
     with pytest.raises(ValueError, match="motion_features"):
         OddMotionCNN(C, H, W, 6, motion_features=7)
-    with pytest.raises(ValueError, match="difference"):
-        VGAITrainConfig(motion_features=2, vision=dataclasses.replace(VISION, motion_mode="stack"))
+    with pytest.raises(ValueError, match="motion frame"):
+        VGAITrainConfig(motion_features=2, vision=dataclasses.replace(VISION, motion_gap=0))
+
+
+def test_stack_pairing_reads_motion_as_the_change_of_one_frames_reading():
+    """OddMotionCNN(pairing="stack") on [I(t), I(t-g)]: the trunk reads each frame alone (a stem of half
+    the channels); swapping the frames keeps the even features and negates the odd ones; equal frames
+    (a swarm moving as one) give exactly 0 on the odd ones; and the odd features ARE the change of the
+    trunk's reading times the motion scale, s (psi(I(t)) - psi(I(t-g))). A configuration in the 'stack' mode
+    builds it with its vision's s, and its spec rebuilds it."""
+    vision = dataclasses.replace(VISION, motion_mode="stack")
+    C, H, W = vision.image_shape()
+    torch.manual_seed(0)
+    cnn = OddMotionCNN(C, H, W, 6, (2, 4), 8, motion_features=2, pairing="stack", motion_scale=3.0).double()
+    assert cnn.stem.in_channels == C // 2
+    x = torch.randn(3, C, H, W, dtype=torch.float64)
+    swapped = torch.cat((x[:, C // 2:], x[:, :C // 2]), 1)
+    torch.testing.assert_close(cnn(swapped)[:, :4], cnn(x)[:, :4])
+    torch.testing.assert_close(cnn(swapped)[:, 4:], -cnn(x)[:, 4:])
+    psi_now, psi_before = cnn.trunk(x[:, :C // 2]), cnn.trunk(x[:, C // 2:])
+    torch.testing.assert_close(cnn(x)[:, 4:], 3.0 * (psi_now - psi_before)[:, 4:])
+    torch.testing.assert_close(cnn(x)[:, :4], (psi_now + psi_before)[:, :4] / 2)
+    r, _ = sample_initial_state(CFG, 2, torch.Generator().manual_seed(1), dtype=torch.float64)
+    still = camera_input(vision, CFG, r + 0.3, r)
+    assert cnn(still.flatten(0, 1))[:, 4:].abs().max() < 1e-9
+    moved = camera_input(vision, CFG, r + 0.3 * torch.randn_like(r), r)
+    assert cnn(moved.flatten(0, 1))[:, 4:].abs().max() > 1e-6
+    model = VGAITrainConfig(motion_features=2, F=6, K=3, hidden=(16,), vision=vision).new_model()
+    assert model.cnn.pairing == "stack" and model.cnn.stem.in_channels == C // 2 and model.cnn.motion_scale == 5.0
+    with pytest.raises(ValueError, match="pairing"):
+        OddMotionCNN(C, H, W, 6, motion_features=2, pairing="sum")
+    rebuilt = cnn_from_spec(cnn.spec(), 6)
+    assert (rebuilt.pairing, rebuilt.motion_scale, rebuilt.odd_gain) == ("stack", 3.0, 3.0)
+    assert cnn_from_spec({k: v for k, v in cnn.spec().items() if k != "pairing"}, 6).pairing == "difference"
 
 
 def test_a_cnn_with_motion_features_round_trips_through_both_file_kinds(tmp_path):

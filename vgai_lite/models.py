@@ -1,9 +1,7 @@
 """The learned parts as torch modules: the aggregation MLP NN_Theta (eqs. 7-8, notebook 03) and the
 visual CNN CNN_Psi (section 3.3, figure 2, notebook 05), and VGAI's pair of them (section 3.4).
 
-Only the networks live here; the controllers that fly them are in ``learned_controllers``, what
-the CNN is shown in ``vision``, and how they are trained in ``dagnn_training`` / ``vgai_training``.
-Shapes: Z (..., K, F) -> u (..., 2); images (M, C, H, W) -> x (M, F).
+Only the networks live here (flown by ``learned_controllers``, shown ``vision``, trained by ``*_training``). Shapes: Z (..., K, F) -> u (..., 2); images (M, C, H, W) -> x (M, F).
 """
 
 from __future__ import annotations
@@ -128,8 +126,7 @@ class VisualCNN(nn.Module):
 
     def trunk(self, images: torch.Tensor) -> torch.Tensor:
         """psi: stem, residual blocks and fully connected layers, (M, C, H, W) -> (M, F)."""
-        # channels-last layout: the same numbers, and on CPU the convolutions' backward pass runs
-        # about twice as fast with it (measured: 0.097 s -> 0.048 s per 400-image step, 2 threads)
+        # channels-last: the same numbers, a backward pass twice as fast on CPU (0.097 -> 0.048 s per 400 images)
         images = images.contiguous(memory_format=torch.channels_last)
         return self.fc(self.blocks(torch.relu(self.stem(images))))
 
@@ -148,7 +145,7 @@ class VisualCNN(nn.Module):
         total, h, w = 0, self.height, self.width
         w1, w2 = self.widths
         h2 = h // 2
-        total += 2 * 9 * self.in_channels * w1 * h2 * w                         # stem
+        total += 2 * 9 * self.stem.in_channels * w1 * h2 * w                    # stem
         total += 2 * 2 * 9 * w1 * w1 * h2 * w                                   # block 1
         total += 2 * 3 * (w1 * w2 + w2 * w2) * w + 2 * w1 * w2 * w              # block 2 (+ 1x1 skip)
         total += 2 * 2 * 2 * 3 * w2 * w2 * w                                    # blocks 3-4
@@ -163,26 +160,32 @@ class OddMotionCNN(VisualCNN):
 
         x_even = (psi(I, D) + psi(I, -D)) / 2,     x_odd = (psi(I, D) - psi(I, -D)) / 2
 
-    A swarm whose drones all move alike shows every drone D = 0, so its odd features are exactly
-    0, and for small motions they are linear in D: a drone's estimate of its neighbours' relative
-    velocities vanishes when they do, instead of settling on a bias that depends on where they
-    stand (the plain CNN's, measured in notebook 11). Then the aux head reads the 2 velocity
-    features from the odd features only (no bias) and the 4 position features from the even ones.
-    It costs a second pass of the trunk.
+    A swarm whose drones all move alike shows every drone D = 0, so its odd features are exactly 0,
+    and for small motions linear in D: a drone's estimate of its neighbours' relative velocities
+    vanishes when they do, instead of a bias that depends on where they stand (the plain CNN's,
+    notebook 11). The aux head reads the 2 velocity features from the odd features only (no bias),
+    the 4 position features from the even ones. It costs a second pass of the trunk. With ``pairing``
+    "stack" (images [I(t), I(t-g)]) the trunk reads one frame at a time and motion is the change of its
+    reading, x_odd = s (psi(I(t)) - psi(I(t-g))), s = ``motion_scale``: to first order s dpsi/dI (I(t) -
+    I(t-g)), as the difference mode's odd features are s dpsi/dD (I(t) - I(t-g)).
     """
 
     def __init__(self, in_channels: int, height: int, width: int, F: int = 24,
-                 widths: Sequence[int] = (8, 16), hidden: int = 64, motion_features: int = 8):
+                 widths: Sequence[int] = (8, 16), hidden: int = 64, motion_features: int = 8,
+                 pairing: str = "difference", motion_scale: float = 5.0):
         if not isinstance(motion_features, int) or not 0 < motion_features <= F:
             raise ValueError(f"motion_features must be an integer in [1, F] = [1, {F}], got {motion_features!r}")
-        if in_channels % 2:
-            raise ValueError(f"motion_features needs images whose second half of channels is the motion "
-                             f"difference (an even channel count), got {in_channels} channels")
+        if in_channels % 2 or pairing not in ("difference", "stack"):
+            raise ValueError(f"motion_features needs images whose second half of channels is the motion difference or "
+                             f"the earlier frame (pairing 'difference' or 'stack'), got {in_channels} channels, pairing {pairing!r}")
         super().__init__(in_channels, height, width, F, widths, hidden)
-        self.motion_features = motion_features
+        self.motion_features, self.pairing, self.motion_scale = motion_features, pairing, float(motion_scale)
+        self.odd_gain = self.motion_scale if pairing == "stack" else 0.5  # x_odd = gain (y_plus - y_minus)
+        if pairing == "stack":  # the trunk reads one frame: half the channels
+            self.stem = nn.Conv2d(in_channels // 2, self.widths[0], 3, stride=(2, 1), padding=1)
 
     def spec(self) -> dict:
-        return {**super().spec(), "motion_features": self.motion_features}
+        return {**super().spec(), "motion_features": self.motion_features, "pairing": self.pairing, "motion_scale": self.motion_scale}
 
     def aux_standardized(self, x: torch.Tensor) -> torch.Tensor:
         """The aux head on features x (M, F), (M, 6): the velocity outputs read only the odd features
@@ -196,24 +199,26 @@ class OddMotionCNN(VisualCNN):
         """(M, C, H, W) -> (M, F): the first F - F_m features even in D, the last F_m odd."""
         self._check(images)
         c = self.in_channels // 2
-        mirrored = torch.cat((images[:, :c], -images[:, c:]), dim=1)  # [I, -D]
-        y_plus, y_minus = self.trunk(torch.cat((images, mirrored))).chunk(2)
-        even, odd = (y_plus + y_minus) / 2, (y_plus - y_minus) / 2
+        if self.pairing == "stack":  # I(t) and I(t-g)
+            y_plus, y_minus = self.trunk(torch.cat((images[:, :c], images[:, c:]))).chunk(2)
+        else:  # [I, D] and [I, -D]
+            y_plus, y_minus = self.trunk(torch.cat((images, torch.cat((images[:, :c], -images[:, c:]), 1)))).chunk(2)
+        even, odd = (y_plus + y_minus) / 2, (y_plus - y_minus) * self.odd_gain
         split = self.F - self.motion_features
         return torch.cat((even[:, :split], odd[:, split:]), dim=1)
 
 
 def visual_cnn(in_channels: int, height: int, width: int, F: int = 24, widths: Sequence[int] = (8, 16),
-               hidden: int = 64, motion_features: int = 0) -> VisualCNN:
+               hidden: int = 64, motion_features: int = 0, pairing: str = "difference", motion_scale: float = 5.0):
     """The paper's ``VisualCNN`` (motion_features 0) or the book's ``OddMotionCNN``."""
     args = (in_channels, height, width, F, widths, hidden)
-    return OddMotionCNN(*args, motion_features) if motion_features else VisualCNN(*args)
+    return OddMotionCNN(*args, motion_features, pairing, motion_scale) if motion_features else VisualCNN(*args)
 
 
 def cnn_from_spec(spec: dict, F: int) -> VisualCNN:
     """The CNN a checkpoint's ``spec`` (``VisualCNN.spec``) describes, with F features."""
     return visual_cnn(spec["in_channels"], spec["height"], spec["width"], F, spec["widths"], spec["hidden"],
-                      spec.get("motion_features", 0))
+                      spec.get("motion_features", 0), spec.get("pairing", "difference"), spec.get("motion_scale", 5.0))
 
 
 class VGAIModel(nn.Module):

@@ -65,7 +65,8 @@ class VGAITrainConfig:
             (``VisualCNN``): exactly 0 when nothing moves relative to the drone, so a swarm moving
             as one reads as such. 0 (default): the paper's plain CNN. None (the book's recipe):
             F // 3, the share of velocities among the 6 exact features (2 of 6), when the CNN sees a
-            motion frame in the "difference" mode (which an explicit F_m > 0 needs), else 0.
+            motion frame in the "difference" mode, else 0. An explicit F_m > 0 needs a motion frame; in
+            the "stack" mode its features are odd in the frames' order (``OddMotionCNN``'s pairing).
         aux_weight: stage 3 adds this times the state-estimation loss of stage 1 (the aux head on
             every image of the window against the exact local features), so that joint training
             keeps the CNN's features readable as the swarm's relative velocities (0: the action
@@ -82,12 +83,10 @@ class VGAITrainConfig:
             camera; domain randomisation). Every stage sees the frames through it: stage 1's states,
             stage 2's flights, stage 3's windows and the learner's own DAgger flights. Default: the
             ideal camera (the paper's clean AirSim frames); the book's: ``BOOK_CAMERA``.
-        teams, radii, group_swarms: the team sizes N and the range (low, high) of communication radii
-            R (m) the training's swarms fly with, in groups of ``group_swarms`` swarms, each with N drawn
-            from ``teams`` and R uniform in ``radii`` (``imitation.flight_groups``, as the DAGNN's). A
-            training step draws the group of a random stored episode, with 1 / N-scaled batches
-            (``per_team``): every step sees about as many drone images. Empty (the paper's): every swarm
-            flies the training's configuration; the authors' released code draws R per sample.
+        teams, radii, group_swarms: the team sizes N and the range (low, high) of radii R (m) the training's
+            swarms fly, in groups of ``group_swarms`` swarms, N drawn from ``teams``, R uniform in ``radii``
+            (``imitation.flight_groups``, as the DAGNN's); a step draws one group, with 1 / N-scaled batches
+            (``per_team``). Empty (the paper's): every swarm flies the training's configuration.
         feature_means: the local features the CNN learns to read (stage 1, and stage 3's state-estimation
             loss) are the local features' sums divided by the number of neighbours (``local_features(per_neighbour=True)``):
             means, which do not grow with the team's density (False: the sums, the DAGNN's).
@@ -159,9 +158,9 @@ class VGAITrainConfig:
                              f"got {self.synthetic_speeds!r}")
         if self.motion_features > self.F:
             raise ValueError(f"VGAITrainConfig: motion_features ({self.motion_features}) cannot exceed F ({self.F})")
-        if self.motion_features and (self.vision.motion_gap == 0 or self.vision.motion_mode != "difference"):
-            raise ValueError("VGAITrainConfig: motion_features needs a motion frame in the 'difference' mode "
-                             f"(got motion_gap={self.vision.motion_gap}, motion_mode={self.vision.motion_mode!r})")
+        if self.motion_features and self.vision.motion_gap == 0:
+            raise ValueError("VGAITrainConfig: motion_features needs a motion frame (the 'difference' or, read frame "
+                             f"by frame, the 'stack' mode), got motion_gap={self.vision.motion_gap}")
 
     def to_dict(self) -> dict:
         """Every field as plain values: what a checkpoint stores and a cache key hashes."""
@@ -195,7 +194,8 @@ class VGAITrainConfig:
     def new_model(self) -> VGAIModel:
         """Freshly initialised CNN_Psi and NN_Theta of this configuration (global torch RNG)."""
         C, H, W = self.vision.image_shape()
-        return VGAIModel(visual_cnn(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features),
+        return VGAIModel(visual_cnn(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features,
+                                    self.vision.motion_mode, self.vision.motion_scale),
                          AggregationMLP(self.K, self.F, self.hidden))
 
 

@@ -42,16 +42,13 @@ class VisionConfig:
             A single frame shows positions only; the expert's action is dominated by velocity
             alignment, visible only across frames.
         motion_mode: "difference" ([I(t), s (I(t) - I(t-g))]) or "stack" ([I(t), I(t-g)]).
-        motion_scale: s, the gain on the frame difference (mode "difference"): with g = 5 steps a
-            neighbour's image moves a fraction of a column between the frames, so the raw difference
-            is small next to I(t); 5 brings the two channels to comparable ranges for the CNN's
-            first layer.
-        prehistory: the episode starts mid-flight, with the cameras already running: the frames
-            before t = 0 are rendered from the initial state flown backwards at its constant initial
-            velocity, r(-k) = r(0) - k Ts v(0). Without it an agent is blind to motion for its first
-            g steps, exactly when the expert acts hardest (80 % of eq. 1 accrues in the first 10
-            steps). The velocities serve only the camera model, once, to draw those frames: they never
-            reach the CNN except as pixels. False: the first frame stands in for the missing ones.
+        motion_scale: s, the gain on the frame difference (in the "stack" mode, on the change of the CNN's
+            reading, ``OddMotionCNN``): in g = 5 steps a neighbour moves a fraction of a column.
+        prehistory: the episode starts mid-flight, the cameras already running: the frames before t = 0
+            show the initial state flown backwards at its initial velocity, r(-k) = r(0) - k Ts v(0).
+            Else an agent is blind to motion for its first g steps, when the expert acts hardest (80 %
+            of eq. 1 accrues in the first 10 steps). The velocities reach the CNN only as pixels.
+            False: the first frame stands in for the missing ones.
     """
 
     view: str = "egocentric"

@@ -1,6 +1,7 @@
 """Experiment: stage 1 alone. Does a wider CNN, or colour, read the distances better before any joint training?
 
     python tools/experiments/stage1_capacity.py --threads 2 --motion-gaps 20,50 --view-widths 64
+    python tools/experiments/stage1_capacity.py --threads 2 --stack-scales 5,0.5 --only-changes --out data/experiments/stage1_stack.json
 
 The camera-only VGAIs of notebook 08 do not flock; what limits them, measured, is a forcing at rest several
 times the depth camera's (``consensus_limit*.json``), with the r/r⁴ sums (eq. 9's collision-avoidance
@@ -96,6 +97,11 @@ def main(argv=None) -> int:
                    help="also the gray recipe of seed 0 with its motion frame G steps old (stage 1 trained here, about 8 min each)")
     p.add_argument("--view-widths", type=lambda x: [int(w) for w in x.split(",") if w], default=[], metavar="W1,W2",
                    help="also the gray recipe of seed 0 with W columns per camera instead of its 32 (finer apparent sizes)")
+    p.add_argument("--stack-scales", type=lambda x: [float(s) for s in x.split(",") if s], default=[], metavar="S1,S2",
+                   help="also the gray recipe of seed 0 reading each frame alone (motion_mode 'stack': its odd features "
+                        "are S times the change of the trunk's reading between the frames, OddMotionCNN's pairing)")
+    p.add_argument("--only-changes", action="store_true",
+                   help="only the changed recipes (--motion-gaps, --view-widths, --stack-scales), not the training records'")
     p.add_argument("--flights", type=int, default=10, help="working episodes each modular pilot flies")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default=str(DATA_DIR / "experiments" / "stage1_capacity.json"))
@@ -108,15 +114,20 @@ def main(argv=None) -> int:
     dagnn = load_controller(dagnn_path)
     out = {"command": command, "pilot": args.pilot, "dagnn": "dagnn/dagnn_K4", "flights_seed": WORKING_SEED, "features": list(FEATURE_NAMES), "times": list(TIMES), "recipes": {}}
     with Provenance(command) as prov:
-        recipes = [(label, record, {}) for label, record in RECIPES.items()] + [
+        recipes = [(label, record, {}) for label, record in RECIPES.items() if not args.only_changes] + [
             (f"gray, 8 and 16 channels, motion frame {g} steps old ({GAP_RECORD}, g = {g})", GAP_RECORD, {"motion_gap": g})
             for g in args.motion_gaps] + [
             (f"gray, 8 and 16 channels, {w} columns per camera ({GAP_RECORD}, {w} columns)", GAP_RECORD, {"view_width": w})
-            for w in args.view_widths]
+            for w in args.view_widths] + [
+            (f"gray, 8 and 16 channels, each frame read alone, s = {x:g} ({GAP_RECORD}, stack)", GAP_RECORD,
+             {"motion_mode": "stack", "motion_scale": x}) for x in args.stack_scales]
         for label, record, change in recipes:
             tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
             if "motion_gap" in change:
                 tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=change["motion_gap"]))
+            if "motion_mode" in change:
+                tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_mode=change["motion_mode"],
+                                                                            motion_scale=change["motion_scale"]))
             if "view_width" in change:
                 render = dataclasses.replace(tcfg.vision.render, view_width=change["view_width"])
                 tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
@@ -126,7 +137,7 @@ def main(argv=None) -> int:
             q = estimator_quality(cnn, tcfg.vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED,
                                   pilot=pilot)
             out["recipes"][label] = {
-                "record": record, "motion_gap": tcfg.vision.motion_gap, "view_width": tcfg.vision.render.view_width, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
+                "record": record, "motion_gap": tcfg.vision.motion_gap, "motion_mode": tcfg.vision.motion_mode, "motion_scale": tcfg.vision.motion_scale, "view_width": tcfg.vision.render.view_width, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
                 "seed": tcfg.seed, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
                 "stage1_sha256": sha256(stage1_file(STAGE1_CACHE, cfg, tcfg)),
                 "read_from_cache": was_cached, "stage1_seconds": round(rec["stage1_seconds"], 1),

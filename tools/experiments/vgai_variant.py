@@ -71,6 +71,9 @@ def main(argv=None) -> int:
                    help="the rendered channels, comma-separated (e.g. gray: no depth; the motion channel follows)")
     p.add_argument("--sensor", choices=("paper", "book"), default=None,
                    help="the vision: the paper's (PAPER_VISION: one gray frame) or the book's (gray, depth, motion)")
+    p.add_argument("--motion-mode", choices=("difference", "stack"), default=None,
+                   help="how the CNN sees the earlier frame (VisionConfig.motion_mode); 'stack' with odd motion "
+                        "features: the trunk reads each frame alone, motion is the change of its reading")
     p.add_argument("--motion-gap", type=int, default=None,
                    help="the motion channel's gap g in steps; 0: one frame, no motion channel (with --motion-features 0)")
     p.add_argument("--warm-starts", choices=("on", "off"), default=None,
@@ -124,6 +127,9 @@ def main(argv=None) -> int:
     if args.motion_gap is not None:  # a change inside the vision configuration: recorded by name
         tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_gap=args.motion_gap))
         changes["motion_gap"] = args.motion_gap
+    if args.motion_mode is not None:  # a change inside the vision configuration: recorded by name
+        tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_mode=args.motion_mode))
+        changes["motion_mode"] = args.motion_mode
     if args.channels is not None:  # a change inside the vision configuration: recorded by name
         channels = tuple(args.channels.split(","))
         render = dataclasses.replace(tcfg.vision.render, channels=channels)

@@ -637,6 +637,10 @@ gap = max(vel(depth_late, late_t[-1]) - vel(e, late_t[-1]) for e in gray_late)
 unexplained = lambda e: 1 - pos(e, late_t[-1]) ** 2  # the share of the r/r⁴ sums' variance the head misses
 short = lambda name: name.split("/")[-1]
 tall = late["checkpoints"]["experiments/vgai_camera_gray24"]  # 24 rows per camera instead of 12
+tall_rec = json.loads((exp_dir / "vgai_camera_gray24.json").read_text())  # its flights, validation episodes
+tall_flight = (f" Flown on {tall_rec['episodes']} validation episodes it {'flocks' if flocked(tall_rec) else 'does not flock'} "
+               f"(relative cost {tall_rec['relative_cost_mean']:.2f}, variance "
+               f"{variance_text(tall_rec['velocity_variance_median']['5s'])} m²/s² at 5 s).")
 prose("At step {t} the drones differ by {dv:.3f} m/s (median); the depth camera's head still reads their velocity sums "
       "with a correlation of {d:.2f}, the gray-only heads with {g}: {verdict} The distances are another matter: the "
       "r/r⁴ sums (Σ_j r_ij/‖r_ij‖⁴, along x and along y), the collision-avoidance term that grows as a neighbour comes close, are read with {pd:.2f} by the "
@@ -651,9 +655,9 @@ prose("At step {t} the drones differ by {dv:.3f} m/s (median); the depth camera'
       pd=pos(depth_late, late_t[-1]), pg=", ".join(f"{pos(e, late_t[-1]):.2f}" for e in gray_late),
       ratio=", ".join(f"{unexplained(e) / unexplained(depth_late):.1f}" for e in gray_late),
       rows=("twice the rows (vgai_camera_gray24, the fourth VGAI row) read them no better "
-            f"({pos(tall, late_t[-1]):.2f}), so a taller image is not the cure either."
+            f"({pos(tall, late_t[-1]):.2f}), so a taller image is not the cure either." + tall_flight
             if unexplained(tall) >= min(unexplained(e) for e in gray_late if e is not tall) else
-            f"twice the rows (vgai_camera_gray24, the fourth VGAI row) read them better ({pos(tall, late_t[-1]):.2f})."))
+            f"twice the rows (vgai_camera_gray24, the fourth VGAI row) read them better ({pos(tall, late_t[-1]):.2f})." + tall_flight))
 
 # %% [markdown]
 # **Or how the controller acts on what it reads?** The consensus measurement of notebook 11,
