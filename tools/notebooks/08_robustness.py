@@ -661,12 +661,13 @@ prose("At step {t} the drones differ by {dv:.3f} m/s (median); the depth camera'
 
 # %% [markdown]
 # **Or how the controller acts on what it reads?** The consensus measurement of notebook 11,
-# section 6 (`tools/experiments/consensus_limit.py`) asks each of them how hard it brakes a velocity
+# section 6 (`tools/experiments/consensus_limit.py`, the run's command below the result) asks each of them how hard it brakes a velocity
 # disagreement it sees (the damping gain γ) and how hard it pushes drones apart when they already
 # agree (the forcing at rest f), on clean frames of the working episodes:
 
 # %%
-limit = json.loads((DATA_DIR / "experiments" / "consensus_limit.json").read_text())["controllers"]
+limit_run = json.loads((DATA_DIR / "experiments" / "consensus_limit.json").read_text())
+limit = limit_run["controllers"]
 cam_limit = {sensor: next(v["5s"] for k, v in limit.items() if f"({name})" in k or f"({name}:" in k)
              for sensor, name in chosen.items()}
 gd, gg = cam_limit["gray + depth"], cam_limit["gray only"]
@@ -685,6 +686,7 @@ display(prose("At 5 s the depth camera brakes with γ = {dg:.1f} /s against a fo
                   "two medians over the flights apart, or not).".format(
                   side(gg["forcing_at_rest_rms_median_ci95"], gd["forcing_at_rest_rms_median_ci95"], ("harder", "as hard", "less")),
                   side(gg["damping_gain_median_ci95"], gd["damping_gain_median_ci95"], ("harder", "as hard", "more weakly")))))
+print("measured by:", limit_run["command"])
 
 # %% [markdown]
 # **Or is it trained too briefly?** The gray-only VGAI's round checks (the relative cost of the learner's
@@ -1062,6 +1064,47 @@ display(prose("At step {t} of the depth camera's flights the gray stage 1's esti
                        "flocks: the gray reading of the neighbours' motion is too small and, scaled up, still not good enough "
                        "for this MLP to flock on. Of what this chapter measured, that reading, what two gray frames show of a "
                        "neighbour's motion, is what the gray camera lacks against the depth camera.")))
+
+# %% [markdown]
+# **Or read the motion frame by frame?** The motion channel hands the CNN the difference of two gray
+# frames, D = s (I(t) − I(t−g)), and its odd features read the neighbours' motion from it. Yet the gray
+# stage 1 reads where the neighbours stand almost as well as the depth camera's (the table above), and
+# a neighbour's motion is the change of where it stands. `OddMotionCNN`'s second pairing
+# (`VisionConfig(motion_mode="stack")`, the CNN given [I(t), I(t−g)]) runs the trunk ψ on each frame
+# alone and takes the odd features as the change of its reading, x_odd = s (ψ(I(t)) − ψ(I(t−g))): to
+# first order a linear function of I(t) − I(t−g) again, now tied to what one frame shows. The gray
+# recipe's stage 1 with it, at s = 5 (the motion channel's gain) and at s = 0.5 (the plain half
+# difference), read and flown as the rows above (`python tools/experiments/stage1_capacity.py --threads 2
+# --stack-scales 5,0.5 --only-changes --out data/experiments/stage1_stack.json`).
+
+# %%
+stack = json.loads((exp_dir / "stage1_stack.json").read_text())["recipes"]
+stack_rows = {"gray, the motion channel (the table above)": c_gray, **stack}
+display(Markdown("| stage 1 | loss at the end | reads the velocity sums | reads the r/r⁴ sums | modular pilot: variance at 5 s "
+                 "[m²/s²] | γ [1/s] | f at rest [m/s²] |\n|---|---|---|---|---|---|---|\n"
+                 + "\n".join(f"| {label} | {x['final_loss']:.3f} | {vel_s1(x):.3f} | {pos_s1(x):.3f} | "
+                             f"{variance_text(mod(x)['velocity_variance_median'])} | {g2(mod(x)['damping_gain_median'])} | "
+                             f"{mod(x)['forcing_at_rest_rms_median']:.3f} |" for label, x in stack_rows.items())
+                 + f"\n\nRead and flown as the table above (step {cap_t}; the working episodes). The loss: stage 1's L1 on "
+                   "the standardised six features, mean of its last 100 steps."))
+best_stack = max(stack.values(), key=vel_s1)
+early = str(min(map(int, cap["times"])))  # the first step read, when the drones still move a few tenths of a m/s
+vel_at = lambda x, t: sum(x["correlation"][t][:2]) / 2
+display(prose("Read frame by frame, the gray stage 1 reads the velocity sums at step {t} with {sv} (s = {ss}), against {gv:.3f} "
+              "from the motion channel, and at step {t0} with {sv0} against {gv0:.3f}; its modular pilot {fl}. {verdict}",
+              t=cap_t, t0=early, sv=", ".join(f"{vel_s1(x):.3f}" for x in stack.values()),
+              sv0=", ".join(f"{vel_at(x, early):.3f}" for x in stack.values()), gv0=vel_at(c_gray, early),
+              ss=", ".join(f"{x['motion_scale']:g}" for x in stack.values()), gv=vel_s1(c_gray),
+              fl=("does not flock: variance at 5 s " if all(mod(x)["velocity_variance_median"] > FLOCKED_VARIANCE for x in stack.values())
+                  else "at 5 s: ") + ", ".join(f"{variance_text(mod(x)['velocity_variance_median'])} m²/s² with s = {x['motion_scale']:g}"
+                                               for x in stack.values()),
+              verdict=("Tied to what one frame shows, the motion is read better: the pairing is worth a full training."
+                       if vel_s1(best_stack) > vel_s1(c_gray) + 0.01 else
+                       "The change of what one gray frame shows of where the neighbours stand, read twice and subtracted, "
+                       "shows their motion less well than the change of the pixels themselves, early in a flight as late"
+                       + (", and the gain s does not decide it (its readings differ by less than their gap to the motion channel's)"
+                          if max(map(vel_s1, stack.values())) - min(map(vel_s1, stack.values())) < vel_s1(c_gray) - vel_s1(best_stack)
+                          else "") + ". The motion channel stays the book's; no VGAI was trained with this pairing.")))
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world

@@ -260,6 +260,7 @@ s1_gray, s1_depth = (next(x for x in stage1 if x["record"] == chosen_camera_runs
 late_read = lambda x: x["correlation"][str(max(map(int, x["correlation"])))]  # the latest step read
 s1_pos = lambda x: sum(late_read(x)[2:4]) / 2  # the r/r^4 sums, mean of x and y
 s1_vel = lambda x: sum(late_read(x)[:2]) / 2  # the velocity sums
+s1_stack = load("experiments/stage1_stack.json")["recipes"].values()  # the same stage 1, each frame read alone
 does_mod = lambda x: "does" if x["modular_pilot"]["5s"]["velocity_variance_median"] <= FLOCKED_VARIANCE else "does not"
 items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "
@@ -275,7 +276,10 @@ items = [
     f"{s1_pos(s1_gray):.3f} against the depth camera's {s1_pos(s1_depth):.3f}, their velocity sums with {s1_vel(s1_gray):.3f} "
     f"against {s1_vel(s1_depth):.3f}; flown with the DAGNN's own MLP, the gray reading {does_mod(s1_gray)} flock (variance at "
     f"5 s {s1_gray['modular_pilot']['5s']['velocity_variance_median']:.1e} m²/s²), the depth camera's {does_mod(s1_depth)} "
-    f"({s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}). A camera-only VGAI that flocks is an open problem.",
+    f"({s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}). Read frame by frame (the odd features as the change "
+    "of what one frame shows, `OddMotionCNN`'s 'stack' pairing; `stage1_stack.json`), the gray stage 1 reads the velocity sums "
+    "with " + ", ".join(f"{s1_vel(x):.3f} (s = {x['motion_scale']:g})" for x in s1_stack) + ". A camera-only VGAI that "
+    "flocks is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
     + verdict_at(1) + " (variance at 5 s " + ", ".join(f"{n_vgai[c]['velocity_variance_median']['5s']:.1e} m²/s² at N' = {c:g}"
