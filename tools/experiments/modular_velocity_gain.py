@@ -1,11 +1,11 @@
 """Experiment: is the gray camera's velocity reading too weak, or only too small? A gain on it, in the loop.
 
-    python tools/experiments/modular_velocity_gain.py --out data/experiments/modular_velocity_gain.json
+    python tools/experiments/modular_velocity_gain.py --threads 2 --gains 1,1.5,2,2.4,3 --swaps
 
 ``stage1_capacity.py`` flies each camera recipe's stage-1 CNN as a modular pilot (its six estimated local
 features fed to the shipped DAGNN's MLP, ``estimator_in_the_loop.VisionDAGNN``): the depth camera's flocks,
-no gray one does. Late in a flight a least-squares estimate whose cue is weak shrinks toward zero: the gray
-CNN's estimated velocity sums are a fraction of the true ones. Here the gray recipe's stage-1 CNN (seed 0, the
+no gray one does. Late in a flight an estimate whose cue is weak shrinks toward zero (stage 1's loss is L1): the
+gray CNN's estimated velocity sums are a fraction of the true ones (the slope below). Here the gray recipe's stage-1 CNN (seed 0, the
 book's width; read from the book's stage-1 cache, or trained as ``train_vgai`` trains it) flies again with its
 two velocity estimates (eq. 4's sums of relative velocities) multiplied by a gain k, the other four as read,
 on clean frames of the working episodes; each with the velocity variance, damping gain and forcing at rest of
@@ -14,6 +14,10 @@ on clean frames of the working episodes; each with the velocity variance, dampin
 Also the slope of the estimated velocity sums on the true ones, at step 190 of flights of the depth camera's
 VGAI from validation initial conditions (the states of ``estimator_late_flight.py``), for the gray and the
 depth camera's stage 1.
+
+``--swaps``: which reading does the gray camera lack? Two modular pilots that take the two velocity estimates from
+one stage 1 and the four distance features from the other (each CNN reading its own frames of the same flight):
+the gray camera's distances with the depth camera's velocities, and the reverse.
 """
 
 from __future__ import annotations
@@ -58,6 +62,24 @@ class VelocityGain(VisionDAGNN):
         return X
 
 
+class SwappedVelocity(VisionDAGNN):
+    """The modular pilot with its four distance features from ``cnn`` and its two velocity estimates from
+    ``other_cnn``, each reading its own frames (``vision``, ``other_vision``) of the same flight."""
+
+    def __init__(self, base, cnn, vision, other_cnn, other_vision):
+        self.other = VisionDAGNN(base, other_cnn, other_vision)
+        super().__init__(base, cnn, vision)
+
+    def reset(self):
+        super().reset()
+        self.other.reset()
+
+    def features(self, r, v):
+        X = super().features(r, v).clone()
+        X[..., :2] = self.other.features(r, v)[..., :2]
+        return X
+
+
 @torch.no_grad()
 def velocity_slope(cnn, vision, cfg: FlockConfig, pilot, episodes: int, step: int) -> list:
     """Least-squares slope of the estimated velocity sums on the exact ones (x, y), through the origin, at
@@ -76,6 +98,8 @@ def main(argv=None) -> int:
     p.add_argument("--flights", type=int, default=10, help="working episodes each pilot flies")
     p.add_argument("--episodes", type=int, default=8, help="validation flights the slope is read on")
     p.add_argument("--pilot", default="experiments/vgai_depthcam", help="the VGAI whose flights the slope is read on")
+    p.add_argument("--swaps", action="store_true",
+                   help="also the pilots that swap the velocity estimates between the gray and the depth stage 1")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default=str(DATA_DIR / "experiments" / "modular_velocity_gain.json"))
     args = p.parse_args(argv)
@@ -87,7 +111,7 @@ def main(argv=None) -> int:
     dagnn_path, pilot_path = DATA_DIR / "dagnn" / "dagnn_K4.pt", DATA_DIR / f"{args.pilot}.pt"
     dagnn, pilot = load_controller(dagnn_path), load_controller(pilot_path)
     out = {"command": command, "dagnn": "dagnn/dagnn_K4", "flights_seed": WORKING_SEED, "slope_step": SLOPE_STEP,
-           "slope_pilot": args.pilot, "stage1": {}, "gains": {}}
+           "slope_pilot": args.pilot, "stage1": {}, "gains": {}, "swaps": {}}
     with Provenance(command) as prov:
         cnns = {}
         for sensor, record in RECORDS.items():
@@ -105,6 +129,11 @@ def main(argv=None) -> int:
             out["gains"][f"{k:g}"] = res
             print(f"gain {k:g}:", {t: f"variance {x['velocity_variance_median']:.2e}, gamma {x['damping_gain_median']:.2f}, "
                                       f"f {x['forcing_at_rest_rms_median']:.3f}" for t, x in res.items()}, flush=True)
+        for dist, vel in ((("gray", "gray + depth"), ("gray + depth", "gray")) if args.swaps else ()):
+            res = damping_and_forcing(SwappedVelocity(dagnn, *cnns[dist], *cnns[vel]), cfg, args.flights)
+            out["swaps"][f"distances: {dist}; velocities: {vel}"] = res
+            print(f"distances {dist}, velocities {vel}:", {t: f"variance {x['velocity_variance_median']:.2e}, gamma "
+                  f"{x['damping_gain_median']:.2f}, f {x['forcing_at_rest_rms_median']:.3f}" for t, x in res.items()}, flush=True)
     out["provenance"] = prov.record(seed=WORKING_SEED, episodes=args.flights,
                                     checkpoints={"data/dagnn/dagnn_K4.pt": sha256(dagnn_path),
                                                  f"data/{args.pilot}.pt": sha256(pilot_path)})

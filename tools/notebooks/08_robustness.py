@@ -872,12 +872,12 @@ display(Markdown("| CNN channels | training seed | relative cost (95% CI) | vari
                         if n in cam_limit2 else "– | – | ") +
                      f"{r['train_seconds'] / 60:.0f} |"
                      for widths, names in WIDE_RUNS.items() for n in names for r in (wide_rec[n],))
-                 + f"\n| depth camera (gray + depth; 8, 16) | 0 | | | | | {pos(depth_late, late_t[-1]):.2f} | "
+                 + f"\n| depth camera (gray + depth; 8, 16) | 0 | – | – | – | – | {pos(depth_late, late_t[-1]):.2f} | "
                    f"{cam_limit2['vgai_depthcam']['5s']['damping_gain_median']:.2f} | "
-                   f"{cam_limit2['vgai_depthcam']['5s']['forcing_at_rest_rms_median']:.3f} | |"
+                   f"{cam_limit2['vgai_depthcam']['5s']['forcing_at_rest_rms_median']:.3f} | – |"
                  + f"\n\n{wide_rec[WIDE_RUNS['16, 32'][0]]['episodes']} validation episodes (seed "
                    f"{wide_rec[WIDE_RUNS['16, 32'][0]]['seed']}); γ and f at 5 s on the working episodes, all in one run "
-                   "(`consensus_limit_camera.json`; –: not measured). The consensus runs above (`consensus_limit.json`, "
+                   "(`consensus_limit_camera.json`; –: not measured here; the depth camera's flights are in this section's first tables). The consensus runs above (`consensus_limit.json`, "
                    "`consensus_limit_rgb.json`) were made at other commits and thread counts, and their medians for the same "
                    "controllers differ a little from this run's. "
                    "Every training ran at one thread beside another job."))
@@ -1037,45 +1037,71 @@ display(prose("At the end of stage 1 the gray CNNs read the r/r⁴ sums with {gp
                   f"(variance {variance_text(mod(x)['velocity_variance_median'])} m²/s²)." for x in c_cols)))
 
 # %% [markdown]
-# **Too weak, or only too small?** Where a cue is weak, a least-squares estimate shrinks toward zero:
-# the gray CNN's velocity estimates late in a flight are a fraction of the true sums. A diagnostic, not
-# a recipe (no gain below is chosen for any other result): the gray stage 1's two velocity estimates
-# multiplied by a gain k before the DAGNN's MLP reads them, the other four features as read, flown
-# again on the working episodes (`python tools/experiments/modular_velocity_gain.py`; k = 1 is the
-# modular pilot of the table above).
+# **Too weak, or only too small?** Where a cue is weak, an estimate trained to match the truth on
+# average (stage 1's L1 loss) shrinks toward zero: the gray CNN's velocity estimates late in a flight are
+# a fraction of the true sums. A diagnostic, not a recipe (no gain below is chosen for any other
+# result): the gray stage 1's two velocity estimates multiplied by a gain k before the DAGNN's MLP reads
+# them, the other four features as read, flown again on the working episodes; k = 1 is the modular
+# pilot of the table above, and the larger gains about undo the shrinkage measured below. And, to tell which
+# reading the gray camera lacks, two pilots that swap readings between the two stage 1s, each CNN
+# reading its own frames of the same flight: the gray camera's four distance features with the depth
+# camera's two velocity estimates, and the reverse (the command below the result).
 
 # %%
 vg = json.loads((exp_dir / "modular_velocity_gain.json").read_text())
 slope = {sensor: sum(x["velocity_slope"]) / 2 for sensor, x in vg["stage1"].items()}
 gains = {float(k): x["5s"] for k, x in vg["gains"].items()}
 best_k = min(gains, key=lambda k: gains[k]["velocity_variance_median"])
+flocks = lambda x: x["velocity_variance_median"] <= FLOCKED_VARIANCE
+swap = {name: x["5s"] for name, x in vg["swaps"].items()}
+gray_dist = next(x for name, x in swap.items() if name.startswith("distances: gray;"))  # gray distances, depth velocities
+depth_dist = next(x for name, x in swap.items() if name.startswith("distances: gray + depth;"))
 display(prose("At step {t} of the depth camera's flights the gray stage 1's estimated velocity sums are {sg:.2f} times the "
               "true ones (the slope through the origin, mean of x and y), the depth camera's {sd:.2f} times. Multiplied by k, "
-              "the gray modular pilot at 5 s: {rows}. {verdict}",
+              "the gray modular pilot at 5 s: {rows}. {verdict}{hard}\n\nSwapped: the pilot with the gray camera's distances "
+              "and the depth camera's velocity estimates {gd} (variance {gdv} m²/s² at 5 s, γ = {gdg} /s, f = {gdf:.3f} m/s²); "
+              "the one with the depth camera's distances and the gray camera's velocity estimates {dg} (variance {dgv} m²/s², "
+              "γ = {dgg} /s, f = {dgf:.3f} m/s²). {lack}",
+              hard="".join(f" From k = {min(k for k in gains if k > best_k and gains[k]['damping_gain_median'] > 10):g} on "
+                           "it brakes with γ of tens per second and its variance rises again."
+                           for _ in range(any(k > best_k and gains[k]["damping_gain_median"] > 10 for k in gains))),
               t=vg["slope_step"], sg=slope["gray"], sd=slope["gray + depth"],
               rows="; ".join(f"k = {k:g}: variance {variance_text(x['velocity_variance_median'])} m²/s², γ = "
                              f"{g2(x['damping_gain_median'])} /s, f = {x['forcing_at_rest_rms_median']:.3f} m/s²"
                              for k, x in sorted(gains.items())),
               verdict=(f"With k = {best_k:g} it flocks: the gray reading points the right way and is only too small."
-                       if gains[best_k]["velocity_variance_median"] <= FLOCKED_VARIANCE else
+                       if flocks(gains[best_k]) else
                        f"The best of these, k = {best_k:g}, lowers the variance {gains[1.0]['velocity_variance_median'] / gains[best_k]['velocity_variance_median']:.0f}-fold "
                        f"and brakes with γ = {g2(gains[best_k]['damping_gain_median'])} /s, yet ends at "
-                       f"{gains[best_k]['velocity_variance_median'] / FLOCKED_VARIANCE:.1f} times the flocking threshold; none of these gains "
-                       "flocks: the gray reading of the neighbours' motion is too small and, scaled up, still not good enough "
-                       "for this MLP to flock on. Of what this chapter measured, that reading, what two gray frames show of a "
-                       "neighbour's motion, is what the gray camera lacks against the depth camera.")))
+                       f"{gains[best_k]['velocity_variance_median'] / FLOCKED_VARIANCE:.1f} times the flocking threshold; none of the "
+                       f"{len(gains)} gains tried flocks: scaled up, the gray reading of the neighbours' motion is still not good "
+                       "enough for this MLP to flock on."),
+              gd="flocks" if flocks(gray_dist) else "does not flock", dg="flocks" if flocks(depth_dist) else "does not flock",
+              gdv=variance_text(gray_dist["velocity_variance_median"]), gdg=g2(gray_dist["damping_gain_median"]),
+              gdf=gray_dist["forcing_at_rest_rms_median"], dgv=variance_text(depth_dist["velocity_variance_median"]),
+              dgg=g2(depth_dist["damping_gain_median"]), dgf=depth_dist["forcing_at_rest_rms_median"],
+              lack=("So what the gray camera lacks against the depth camera is its reading of the neighbours' motion, from two "
+                    "gray frames: given the depth camera's, the gray distances fly to a flock, and the depth camera's distances "
+                    "do not rescue the gray motion." if flocks(gray_dist) and not flocks(depth_dist) else
+                    "So the motion reading alone does not decide it: the swap does not separate the two readings this way "
+                    "(which of them flocks is shown above).")))
+print("measured by:", vg["command"])
 
 # %% [markdown]
 # **Or read the motion frame by frame?** The motion channel hands the CNN the difference of two gray
-# frames, D = s (I(t) − I(t−g)), and its odd features read the neighbours' motion from it. Yet the gray
-# stage 1 reads where the neighbours stand almost as well as the depth camera's (the table above), and
-# a neighbour's motion is the change of where it stands. `OddMotionCNN`'s second pairing
-# (`VisionConfig(motion_mode="stack")`, the CNN given [I(t), I(t−g)]) runs the trunk ψ on each frame
-# alone and takes the odd features as the change of its reading, x_odd = s (ψ(I(t)) − ψ(I(t−g))): to
-# first order a linear function of I(t) − I(t−g) again, now tied to what one frame shows. The gray
-# recipe's stage 1 with it, at s = 5 (the motion channel's gain) and at s = 0.5 (the plain half
-# difference), read and flown as the rows above (`python tools/experiments/stage1_capacity.py --threads 2
-# --stack-scales 5,0.5 --only-changes --out data/experiments/stage1_stack.json`).
+# frames, D = s (I(t) − I(t−g)), and its odd features read the neighbours' motion from it:
+# x_odd = (ψ(I, D) − ψ(I, −D)) / 2. Yet the gray stage 1 reads where the neighbours stand almost as well
+# as the depth camera's (the table above), and a neighbour's motion is the change of where it stands.
+# `OddMotionCNN`'s second pairing, the "stack" one (`VGAITrainConfig(motion_features=8,
+# vision=VisionConfig(motion_mode="stack"))`: the CNN is given [I(t), I(t−g)]), runs the trunk ψ on each
+# frame alone. Its first F − F_m = 16 outputs, averaged over the two frames, feed the four distance
+# estimates; its last F_m = 8 are differenced between the frames and feed the two velocity estimates,
+# x_odd = s (ψ(I(t)) − ψ(I(t−g))). To first order both pairings are a linear function of I(t) − I(t−g);
+# the stack one ties it to features that ψ computes from one frame. The gray recipe's stage 1 with it
+# (one training each), at s = 5 (the motion channel's gain) and at s = 0.5 (the factor ½ of the
+# difference pairing's x_odd above), read and flown as the rows above (`python
+# tools/experiments/stage1_capacity.py --threads 2 --stack-scales 5,0.5 --only-changes --out
+# data/experiments/stage1_stack.json`).
 
 # %%
 stack = json.loads((exp_dir / "stage1_stack.json").read_text())["recipes"]
@@ -1100,11 +1126,13 @@ display(prose("Read frame by frame, the gray stage 1 reads the velocity sums at 
                                                for x in stack.values()),
               verdict=("Tied to what one frame shows, the motion is read better: the pairing is worth a full training."
                        if vel_s1(best_stack) > vel_s1(c_gray) + 0.01 else
-                       "The change of what one gray frame shows of where the neighbours stand, read twice and subtracted, "
-                       "shows their motion less well than the change of the pixels themselves, early in a flight as late"
-                       + (", and the gain s does not decide it (its readings differ by less than their gap to the motion channel's)"
+                       "The change of the trunk's features between the two frames, each read alone, shows the neighbours' "
+                       "motion less well than the trunk's reading of the change of the pixels"
+                       + (", early in a flight as late" if max(vel_at(x, early) for x in stack.values()) < vel_at(c_gray, early) else "")
+                       + (", and the gain s does not decide it: its readings differ by less than their gap to the motion channel's"
                           if max(map(vel_s1, stack.values())) - min(map(vel_s1, stack.values())) < vel_s1(c_gray) - vel_s1(best_stack)
-                          else "") + ". The motion channel stays the book's; no VGAI was trained with this pairing.")))
+                          else "") + "; one stage 1 each, trained as long as the motion channel's. The motion channel stays the "
+                       "book's; no VGAI was trained with this pairing.")))
 
 # %% [markdown]
 # ## 7. Larger teams in a perturbed world
@@ -1246,7 +1274,8 @@ else:
 #   to the clean flight: then a degradation curve means what it says.
 # * Judge robustness as everything else: cost, flocking and safety together, on the same episodes.
 # * When a learned pipeline fails, read each stage where it ends and fly it in the loop: a CNN that reads
-#   the distances as well as another's does not, for that, fly as well (section 6's stage 1 and modular pilots).
+#   the distances as well as another's does not, for that, fly as well (section 6's stage 1 and modular pilots);
+#   then swap one reading at a time with a pipeline that works, to find the one that fails (its swapped pilots).
 #
 # ## What's next
 #

@@ -261,6 +261,9 @@ late_read = lambda x: x["correlation"][str(max(map(int, x["correlation"])))]  # 
 s1_pos = lambda x: sum(late_read(x)[2:4]) / 2  # the r/r^4 sums, mean of x and y
 s1_vel = lambda x: sum(late_read(x)[:2]) / 2  # the velocity sums
 s1_stack = load("experiments/stage1_stack.json")["recipes"].values()  # the same stage 1, each frame read alone
+swaps = {name: x["5s"]["velocity_variance_median"] for name, x in load("experiments/modular_velocity_gain.json")["swaps"].items()}
+swap_var = lambda dist: next(x for name, x in swaps.items() if name.startswith(f"distances: {dist};"))
+swap_word = lambda dist: "flocks" if swap_var(dist) <= FLOCKED_VARIANCE else "does not flock"
 does_mod = lambda x: "does" if x["modular_pilot"]["5s"]["velocity_variance_median"] <= FLOCKED_VARIANCE else "does not"
 items = [
     "* **Vision without depth.** The book's VGAI flocks with a depth channel the paper's cameras do not give; with "
@@ -276,10 +279,19 @@ items = [
     f"{s1_pos(s1_gray):.3f} against the depth camera's {s1_pos(s1_depth):.3f}, their velocity sums with {s1_vel(s1_gray):.3f} "
     f"against {s1_vel(s1_depth):.3f}; flown with the DAGNN's own MLP, the gray reading {does_mod(s1_gray)} flock (variance at "
     f"5 s {s1_gray['modular_pilot']['5s']['velocity_variance_median']:.1e} m²/s²), the depth camera's {does_mod(s1_depth)} "
-    f"({s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}). Read frame by frame (the odd features as the change "
-    "of what one frame shows, `OddMotionCNN`'s 'stack' pairing; `stage1_stack.json`), the gray stage 1 reads the velocity sums "
-    "with " + ", ".join(f"{s1_vel(x):.3f} (s = {x['motion_scale']:g})" for x in s1_stack) + ". A camera-only VGAI that "
-    "flocks is an open problem.",
+    f"({s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}). With each frame read alone and the velocity "
+    "estimates taken from the change of the CNN's features between the frames (`OddMotionCNN`'s 'stack' pairing, s its gain; "
+    "`stage1_stack.json`), the gray stage 1 reads the velocity sums with " + ", ".join(
+        f"{s1_vel(x):.3f} (s = {x['motion_scale']:g})" for x in s1_stack) + f" against {s1_vel(s1_gray):.3f} from the motion "
+    "channel, and its modular pilot " + ("does not flock" if all(
+        x["modular_pilot"]["5s"]["velocity_variance_median"] > FLOCKED_VARIANCE for x in s1_stack) else "flocks at some s")
+    + " (variance at 5 s " + ", ".join(f"{x['modular_pilot']['5s']['velocity_variance_median']:.1e}" for x in s1_stack)
+    + " m²/s²). With the readings swapped between the two stage 1s (`modular_velocity_gain.json`), a pilot with the gray "
+    f"distances and the depth camera's velocity estimates {swap_word('gray')} (variance {swap_var('gray'):.1e}), one with the "
+    f"depth camera's distances and the gray velocity estimates {swap_word('gray + depth')} ({swap_var('gray + depth'):.1e})"
+    + (": what the gray camera lacks is its reading of the neighbours' motion. " if swap_word("gray") == "flocks" and
+       swap_word("gray + depth") != "flocks" else ". ")
+    + "A camera-only VGAI that flocks is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
     + verdict_at(1) + " (variance at 5 s " + ", ".join(f"{n_vgai[c]['velocity_variance_median']['5s']:.1e} m²/s² at N' = {c:g}"
