@@ -2,6 +2,7 @@
 
     python tools/experiments/stage1_capacity.py --threads 2 --motion-gaps 20,50 --view-widths 64
     python tools/experiments/stage1_capacity.py --threads 2 --stack-scales 5,0.5 --only-changes --out data/experiments/stage1_stack.json
+    python tools/experiments/stage1_capacity.py --threads 2 --warm-steps 6000 --only-changes --out data/experiments/stage1_longer.json
 
 The camera-only VGAIs of notebook 08 do not flock; what limits them, measured, is a forcing at rest several
 times the depth camera's (``consensus_limit*.json``), with the r/r⁴ sums (eq. 9's collision-avoidance
@@ -100,8 +101,10 @@ def main(argv=None) -> int:
     p.add_argument("--stack-scales", type=lambda x: [float(s) for s in x.split(",") if s], default=[], metavar="S1,S2",
                    help="also the gray recipe of seed 0 reading each frame alone (motion_mode 'stack': its odd features "
                         "are S times the change of the trunk's reading between the frames, OddMotionCNN's pairing)")
+    p.add_argument("--warm-steps", type=lambda x: [int(n) for n in x.split(",") if n], default=[], metavar="N1,N2",
+                   help="also the gray recipe of seed 0 with N stage-1 steps instead of its own (is its reading still improving?)")
     p.add_argument("--only-changes", action="store_true",
-                   help="only the changed recipes (--motion-gaps, --view-widths, --stack-scales), not the training records'")
+                   help="only the changed recipes (--motion-gaps, --view-widths, --stack-scales, --warm-steps), not the training records'")
     p.add_argument("--flights", type=int, default=10, help="working episodes each modular pilot flies")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default=str(DATA_DIR / "experiments" / "stage1_capacity.json"))
@@ -120,7 +123,9 @@ def main(argv=None) -> int:
             (f"gray, 8 and 16 channels, {w} columns per camera ({GAP_RECORD}, {w} columns)", GAP_RECORD, {"view_width": w})
             for w in args.view_widths] + [
             (f"gray, 8 and 16 channels, each frame read alone, s = {x:g} ({GAP_RECORD}, stack)", GAP_RECORD,
-             {"motion_mode": "stack", "motion_scale": x}) for x in args.stack_scales]
+             {"motion_mode": "stack", "motion_scale": x}) for x in args.stack_scales] + [
+            (f"gray, 8 and 16 channels, {n} stage-1 steps ({GAP_RECORD}, {n} steps)", GAP_RECORD, {"warm_steps": n})
+            for n in args.warm_steps]
         for label, record, change in recipes:
             tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
             if "motion_gap" in change:
@@ -128,6 +133,8 @@ def main(argv=None) -> int:
             if "motion_mode" in change:
                 tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, motion_mode=change["motion_mode"],
                                                                             motion_scale=change["motion_scale"]))
+            if "warm_steps" in change:
+                tcfg = dataclasses.replace(tcfg, warm_steps=change["warm_steps"])
             if "view_width" in change:
                 render = dataclasses.replace(tcfg.vision.render, view_width=change["view_width"])
                 tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
@@ -138,11 +145,13 @@ def main(argv=None) -> int:
                                   pilot=pilot)
             out["recipes"][label] = {
                 "record": record, "motion_gap": tcfg.vision.motion_gap, "motion_mode": tcfg.vision.motion_mode, "motion_scale": tcfg.vision.motion_scale, "view_width": tcfg.vision.render.view_width, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
-                "seed": tcfg.seed, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
+                "seed": tcfg.seed, "warm_steps": tcfg.warm_steps, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
                 "stage1_sha256": sha256(stage1_file(STAGE1_CACHE, cfg, tcfg)),
                 "read_from_cache": was_cached, "stage1_seconds": round(rec["stage1_seconds"], 1),
                 "parameters": sum(x.numel() for x in cnn.parameters()),
                 "final_loss": round(sum(rec["warm_loss"][-100:]) / len(rec["warm_loss"][-100:]), 4),
+                "loss_every_1000_steps": [round(sum(rec["warm_loss"][k - 100:k]) / 100, 4)  # mean of the 100 steps before step k
+                                          for k in range(1000, len(rec["warm_loss"]) + 1, 1000)],
                 "seconds_here": round(time.perf_counter() - start, 1),
                 "correlation": {str(t): [round(c, 3) for c in q[t]] for t in TIMES},
                 "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision), cfg, args.flights)}

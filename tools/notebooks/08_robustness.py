@@ -1135,6 +1135,36 @@ display(prose("Read frame by frame, the gray stage 1 reads the velocity sums at 
                        "book's; no VGAI was trained with this pairing.")))
 
 # %% [markdown]
+# **Or is stage 1 too short?** Every stage 1 above runs the recipe's fixed number of steps. The gray
+# recipe's stage 1 run on for twice as many (the same seed, so its first half is the stage 1 above), read
+# and flown as the rows above (`python tools/experiments/stage1_capacity.py --threads 2 --warm-steps 6000
+# --only-changes --out data/experiments/stage1_longer.json`):
+
+# %%
+longer = next(iter(json.loads((exp_dir / "stage1_longer.json").read_text())["recipes"].values()))
+display(prose("Over its {n} steps the gray stage 1's loss is {curve} (every 1000 steps; at step {n0} {l3:.4f}, {same} "
+              "{l0:.4f}); it reads the velocity sums at step "
+              "{t} with {lv:.3f} (after {n0} steps: {gv:.3f}) and the r/r⁴ sums with {lp:.3f} ({gp:.3f}); its modular pilot {fl} "
+              "(variance {var} m²/s² at 5 s, γ = {gam} /s; after {n0} steps {var0} m²/s²). {verdict}",
+              n=longer["warm_steps"], n0=cam_train[chosen["gray only"]]["train_config"]["warm_steps"],
+              curve=", ".join(f"{x:.3f}" for x in longer["loss_every_1000_steps"]), t=cap_t,
+              l3=longer["loss_every_1000_steps"][cam_train[chosen["gray only"]]["train_config"]["warm_steps"] // 1000 - 1],
+              l0=c_gray["final_loss"],
+              same=("as the stage 1 above ends, the same run continued:" if abs(
+                  longer["loss_every_1000_steps"][cam_train[chosen["gray only"]]["train_config"]["warm_steps"] // 1000 - 1]
+                  - c_gray["final_loss"]) < 1e-4 else "where the stage 1 above ends at"),
+              lv=vel_s1(longer), gv=vel_s1(c_gray), lp=pos_s1(longer), gp=pos_s1(c_gray),
+              fl="flocks" if mod(longer)["velocity_variance_median"] <= FLOCKED_VARIANCE else "does not flock",
+              var=variance_text(mod(longer)["velocity_variance_median"]), gam=g2(mod(longer)["damping_gain_median"]),
+              var0=variance_text(mod(c_gray)["velocity_variance_median"]),
+              verdict=("Twice the steps read the neighbours' motion better, and the pilot flocks: the gray stage 1 was too short."
+                       if mod(longer)["velocity_variance_median"] <= FLOCKED_VARIANCE else
+                       "Twice the steps lower the loss, yet do not make the gray reading of the neighbours' motion good "
+                       "enough to flock on" + (" (they read it better)" if vel_s1(longer) > vel_s1(c_gray) + 0.01 else
+                                               " (nor, by its correlation, read it better)")
+                       + ": the length of stage 1 is not what the gray camera lacks.")))
+
+# %% [markdown]
 # ## 7. Larger teams in a perturbed world
 #
 # Trained on 50 drones, flown by 100 and 200 with the perturbation at each target's size (pixel noise
