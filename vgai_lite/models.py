@@ -1,7 +1,7 @@
 """The learned parts as torch modules: the aggregation MLP NN_Theta (eqs. 7-8, notebook 03) and the
 visual CNN CNN_Psi (section 3.3, figure 2, notebook 05), and VGAI's pair of them (section 3.4).
 
-Only the networks live here (flown by ``learned_controllers``, shown ``vision``, trained by ``*_training``). Shapes: Z (..., K, F) -> u (..., 2); images (M, C, H, W) -> x (M, F).
+Only the networks live here (flown by ``learned_controllers``, fed by ``vision``, trained by ``*_training``). Shapes: Z (..., K, F) -> u (..., 2); images (M, C, H, W) -> x (M, F).
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ class VisualCNN(nn.Module):
         total += 2 * 3 * (w1 * w2 + w2 * w2) * w + 2 * w1 * w2 * w              # block 2 (+ 1x1 skip)
         total += 2 * 2 * 2 * 3 * w2 * w2 * w                                    # blocks 3-4
         total += 2 * (w2 * w * self.hidden + self.hidden * self.F)              # fc
-        return total * (2 if self.motion_features else 1)                       # [I, D] and [I, -D]
+        return total * (2 if self.motion_features else 1)                       # two passes of the trunk
 
 
 class OddMotionCNN(VisualCNN):
@@ -209,7 +209,8 @@ class OddMotionCNN(VisualCNN):
 
 
 def visual_cnn(in_channels: int, height: int, width: int, F: int = 24, widths: Sequence[int] = (8, 16),
-               hidden: int = 64, motion_features: int = 0, pairing: str = "difference", motion_scale: float = 5.0):
+               hidden: int = 64, motion_features: int = 0, pairing: str = "difference",
+               motion_scale: float = 5.0) -> VisualCNN:
     """The paper's ``VisualCNN`` (motion_features 0) or the book's ``OddMotionCNN``."""
     args = (in_channels, height, width, F, widths, hidden)
     return OddMotionCNN(*args, motion_features, pairing, motion_scale) if motion_features else VisualCNN(*args)
