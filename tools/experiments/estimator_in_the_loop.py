@@ -29,6 +29,7 @@ sys.path.insert(0, str(ROOT))
 from vgai_lite import (ExpertController, FlockConfig, consensus, load_controller, local_features,  # noqa: E402
                        relative_cost, rollout, sample_initial_state)
 from vgai_lite.book import DATA_DIR, WORKING_SEED  # noqa: E402
+from vgai_lite.camera import sensor_noise  # noqa: E402
 from vgai_lite.checkpoints import load_estimator, save_estimator  # noqa: E402
 from vgai_lite.learned_controllers import DAGNNController  # noqa: E402
 from vgai_lite.state_estimation import train_state_estimator  # noqa: E402
@@ -51,22 +52,33 @@ class NoisyDAGNN(DAGNNController):
 
 
 class VisionDAGNN(DAGNNController):
-    """The DAGNN's MLP fed with a state estimator's 6 features, estimated from each drone's images."""
+    """The DAGNN's MLP fed with a state estimator's 6 features, estimated from each drone's images; with
+    ``noise`` > 0, each frame through a camera with Gaussian sensor noise of that sigma (``camera.sensor_noise``,
+    a frame's draws fixed by ``seed`` and the step it was taken at, so the motion frame g steps later is the
+    same noisy frame)."""
 
-    def __init__(self, base: DAGNNController, cnn, vision: VisionConfig):
+    def __init__(self, base: DAGNNController, cnn, vision: VisionConfig, noise: float = 0.0, seed: int = 0):
         super().__init__(base.model, base.cfg, base.gso_kind, base.feature_transform)
+        if not 0.0 <= noise <= 1.0:
+            raise ValueError(f"VisionDAGNN: noise is a pixel sigma in [0, 1], got {noise!r}")
         self.cnn, self.vision, self.seen = cnn, vision, []
+        self.noise, self.seed, self.t = noise, seed, 0
 
     def reset(self):
         super().reset()
-        self.seen = []
+        self.seen, self.t = [], 0
+
+    def _camera(self, img, lag):
+        gen = torch.Generator().manual_seed(self.seed * 1_000_003 + self.t - lag + 1_000_000)
+        return sensor_noise(img, self.noise, gen, self.vision.render.channels)
 
     def features(self, r, v):
         g = self.vision.motion_gap
         if not self.seen:  # the frames before t = 0, as VGAIController draws them
             self.seen = [flown_backwards(r, v, k, self.cfg.Ts) for k in range(g, 0, -1)]
         self.seen = (self.seen + [r])[-(g + 1):]
-        images = camera_input(self.vision, self.cfg, r, self.seen[0])
+        images = camera_input(self.vision, self.cfg, r, self.seen[0], self._camera if self.noise > 0 else None)
+        self.t += 1
         with torch.no_grad():
             return self.cnn.estimate_local_features(images.flatten(0, 1)).view(*r.shape[:2], 6)
 

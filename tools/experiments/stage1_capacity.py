@@ -3,6 +3,8 @@
     python tools/experiments/stage1_capacity.py --threads 2 --motion-gaps 20,50 --view-widths 64
     python tools/experiments/stage1_capacity.py --threads 2 --stack-scales 5,0.5 --only-changes --out data/experiments/stage1_stack.json
     python tools/experiments/stage1_capacity.py --threads 2 --warm-steps 6000 --only-changes --out data/experiments/stage1_longer.json
+    python tools/experiments/stage1_capacity.py --threads 2 --noise-max 0,0.02,0.05 --pilot-noise 0.01,0.0392 --only-changes --out data/experiments/stage1_noise.json
+    python tools/experiments/stage1_capacity.py --threads 2 --noise-max 0,0.01 --noise-gap 20 --pilot-noise 0.01,0.0392 --only-changes --out data/experiments/stage1_noise_gap20.json
 
 The camera-only VGAIs of notebook 08 do not flock; what limits them, measured, is a forcing at rest several
 times the depth camera's (``consensus_limit*.json``), with the r/r⁴ sums (eq. 9's collision-avoidance
@@ -103,8 +105,16 @@ def main(argv=None) -> int:
                         "are S times the change of the trunk's reading between the frames, OddMotionCNN's pairing)")
     p.add_argument("--warm-steps", type=lambda x: [int(n) for n in x.split(",") if n], default=[], metavar="N1,N2",
                    help="also the gray recipe of seed 0 with N stage-1 steps instead of its own (is its reading still improving?)")
+    p.add_argument("--noise-max", type=lambda x: [float(n) for n in x.split(",") if n], default=[], metavar="S1,S2",
+                   help="also the gray recipe of seed 0 with its cameras' sensor noise drawn from [0, S] instead of its own "
+                        "range (the other camera settings unchanged): does training through the noise shrink its reading?")
     p.add_argument("--only-changes", action="store_true",
-                   help="only the changed recipes (--motion-gaps, --view-widths, --stack-scales, --warm-steps), not the training records'")
+                   help="only the changed recipes (--motion-gaps, --view-widths, --stack-scales, --warm-steps, --noise-max), "
+                        "not the training records'")
+    p.add_argument("--noise-gap", type=int, default=None, metavar="G",
+                   help="the --noise-max recipes with their motion frame G steps old instead of the recipe's own")
+    p.add_argument("--pilot-noise", type=lambda x: [float(n) for n in x.split(",") if n], default=[], metavar="S1,S2",
+                   help="also fly each modular pilot with sensor noise of sigma S on its frames (e.g. 0.0392, the paper's 10/255)")
     p.add_argument("--flights", type=int, default=10, help="working episodes each modular pilot flies")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default=str(DATA_DIR / "experiments" / "stage1_capacity.json"))
@@ -125,7 +135,11 @@ def main(argv=None) -> int:
             (f"gray, 8 and 16 channels, each frame read alone, s = {x:g} ({GAP_RECORD}, stack)", GAP_RECORD,
              {"motion_mode": "stack", "motion_scale": x}) for x in args.stack_scales] + [
             (f"gray, 8 and 16 channels, {n} stage-1 steps ({GAP_RECORD}, {n} steps)", GAP_RECORD, {"warm_steps": n})
-            for n in args.warm_steps]
+            for n in args.warm_steps] + [
+            (f"gray, 8 and 16 channels, sensor noise in [0, {x:g}]"
+             + (f", motion frame {args.noise_gap} steps old" if args.noise_gap is not None else "") + f" ({GAP_RECORD}, noise)",
+             GAP_RECORD, {"noise_max": x, **({"motion_gap": args.noise_gap} if args.noise_gap is not None else {})})
+            for x in args.noise_max]
         for label, record, change in recipes:
             tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
             if "motion_gap" in change:
@@ -135,6 +149,8 @@ def main(argv=None) -> int:
                                                                             motion_scale=change["motion_scale"]))
             if "warm_steps" in change:
                 tcfg = dataclasses.replace(tcfg, warm_steps=change["warm_steps"])
+            if "noise_max" in change:
+                tcfg = dataclasses.replace(tcfg, camera=dataclasses.replace(tcfg.camera, noise=(0.0, change["noise_max"])))
             if "view_width" in change:
                 render = dataclasses.replace(tcfg.vision.render, view_width=change["view_width"])
                 tcfg = dataclasses.replace(tcfg, vision=dataclasses.replace(tcfg.vision, render=render))
@@ -145,7 +161,7 @@ def main(argv=None) -> int:
                                   pilot=pilot)
             out["recipes"][label] = {
                 "record": record, "motion_gap": tcfg.vision.motion_gap, "motion_mode": tcfg.vision.motion_mode, "motion_scale": tcfg.vision.motion_scale, "view_width": tcfg.vision.render.view_width, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
-                "seed": tcfg.seed, "warm_steps": tcfg.warm_steps, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
+                "seed": tcfg.seed, "warm_steps": tcfg.warm_steps, "camera_noise": list(tcfg.camera.noise) if tcfg.camera else None, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
                 "stage1_sha256": sha256(stage1_file(STAGE1_CACHE, cfg, tcfg)),
                 "read_from_cache": was_cached, "stage1_seconds": round(rec["stage1_seconds"], 1),
                 "parameters": sum(x.numel() for x in cnn.parameters()),
@@ -154,11 +170,16 @@ def main(argv=None) -> int:
                                           for k in range(1000, len(rec["warm_loss"]) + 1, 1000)],
                 "seconds_here": round(time.perf_counter() - start, 1),
                 "correlation": {str(t): [round(c, 3) for c in q[t]] for t in TIMES},
-                "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision), cfg, args.flights)}
+                "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision), cfg, args.flights),
+                "modular_pilot_noise": {f"{x:g}": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision, noise=x), cfg, args.flights)
+                                        for x in args.pilot_noise}}
             m = out["recipes"][label]["modular_pilot"]["5s"]
             print(label, {t: [round(c, 2) for c in q[t][2:4]] for t in TIMES}, f"modular pilot at 5 s: variance "
                   f"{m['velocity_variance_median']:.2e}, gamma {m['damping_gain_median']:.2f}, f {m['forcing_at_rest_rms_median']:.3f}",
                   flush=True)
+            for x, res in out["recipes"][label]["modular_pilot_noise"].items():
+                print(f"  ... through sensor noise of sigma {x}: variance {res['5s']['velocity_variance_median']:.2e}, "
+                      f"gamma {res['5s']['damping_gain_median']:.2f}, f {res['5s']['forcing_at_rest_rms_median']:.3f}", flush=True)
     out["provenance"] = prov.record(seed=VALIDATION_SEED, episodes=args.episodes,
                                     checkpoints={f"data/{args.pilot}.pt": sha256(DATA_DIR / f"{args.pilot}.pt"),
                                                  "data/dagnn/dagnn_K4.pt": sha256(dagnn_path)})
