@@ -70,6 +70,8 @@ DEFINED_NUMBERS = {
     "144": "the paper's camera rows (144 x 256 pixels)",
     "256": "the paper's camera columns (144 x 256 pixels)",
     "3.5": "the top of U(1.0, 3.5) m, the radius range of the authors' released training code",
+    "0.005": "the top of a stage 1's sensor-noise range, a set-up of notebook 08's noise probe "
+             "(stage1_capacity.py --noise-max 0,0.005)",
 }
 
 
