@@ -4,6 +4,7 @@
     python tools/experiments/stage1_capacity.py --threads 2 --stack-scales 5,0.5 --only-changes --out data/experiments/stage1_stack.json
     python tools/experiments/stage1_capacity.py --threads 2 --warm-steps 6000 --only-changes --out data/experiments/stage1_longer.json
     python tools/experiments/stage1_capacity.py --threads 2 --noise-max 0,0.02,0.05 --pilot-noise 0.01,0.0392 --only-changes --out data/experiments/stage1_noise.json
+    python tools/experiments/stage1_capacity.py --threads 2 --noise-max 0.005 --trained vgai_camera_quiet_gray --only-changes --out data/experiments/stage1_noise_joint.json
     python tools/experiments/stage1_capacity.py --threads 2 --noise-max 0,0.01 --noise-gap 20 --pilot-noise 0.01,0.0392 --only-changes --out data/experiments/stage1_noise_gap20.json
 
 The camera-only VGAIs of notebook 08 do not flock; what limits them, measured, is a forcing at rest several
@@ -113,6 +114,9 @@ def main(argv=None) -> int:
                         "not the training records'")
     p.add_argument("--noise-gap", type=int, default=None, metavar="G",
                    help="the --noise-max recipes with their motion frame G steps old instead of the recipe's own")
+    p.add_argument("--trained", default=[], type=lambda x: [n for n in x.split(",") if n], metavar="NAME1,NAME2",
+                   help="also the CNN of finished VGAI trainings (data/experiments/NAME.pt) after their joint training, read "
+                        "and flown the same way: does the joint training keep what its stage 1 read?")
     p.add_argument("--pilot-noise", type=lambda x: [float(n) for n in x.split(",") if n], default=[], metavar="S1,S2",
                    help="also fly each modular pilot with sensor noise of sigma S on its frames (e.g. 0.0392, the paper's 10/255)")
     p.add_argument("--flights", type=int, default=10, help="working episodes each modular pilot flies")
@@ -140,6 +144,22 @@ def main(argv=None) -> int:
              + (f", motion frame {args.noise_gap} steps old" if args.noise_gap is not None else "") + f" ({GAP_RECORD}, noise)",
              GAP_RECORD, {"noise_max": x, **({"motion_gap": args.noise_gap} if args.noise_gap is not None else {})})
             for x in args.noise_max]
+        for name in args.trained:  # a finished training's CNN, after stages 2 and 3
+            path = DATA_DIR / "experiments" / f"{name}.pt"
+            trained = load_controller(path)
+            cnn, vision = trained.model.cnn.eval(), trained.vision
+            q = estimator_quality(cnn, vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED, pilot=pilot)
+            out["recipes"][f"{name}, after its joint training"] = {
+                "record": name, "checkpoint_sha256": sha256(path), "motion_gap": vision.motion_gap,
+                "view_width": vision.render.view_width, "channels": list(vision.render.channels),
+                "correlation": {str(t): [round(c, 3) for c in q[t]] for t in TIMES},
+                "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, vision), cfg, args.flights),
+                "modular_pilot_noise": {f"{x:g}": damping_and_forcing(VisionDAGNN(dagnn, cnn, vision, noise=x), cfg, args.flights)
+                                        for x in args.pilot_noise}}
+            m = out["recipes"][f"{name}, after its joint training"]["modular_pilot"]["5s"]
+            print(name, "after its joint training: modular pilot at 5 s: variance "
+                  f"{m['velocity_variance_median']:.2e}, gamma {m['damping_gain_median']:.2f}, f {m['forcing_at_rest_rms_median']:.3f}",
+                  flush=True)
         for label, record, change in recipes:
             tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
             if "motion_gap" in change:

@@ -268,14 +268,17 @@ does_mod = lambda x: "does" if x["modular_pilot"]["5s"]["velocity_variance_media
 s1_noise = {x["stage1_file"]: x for name in ("stage1_noise", "stage1_noise_floor")  # notebook 08: stage 1 through less noise
             for x in load(f"experiments/{name}.json")["recipes"].values() if x["motion_gap"] == gray_rec_vision["motion_gap"]}
 s1_quiet = [x for x in s1_noise.values() if x["camera_noise"][1] == 0]
+s1_depth_noise = load(f"experiments/{chosen_camera_runs()['gray + depth']}.json")["train_config"]["camera"]["noise"][1]
 quiet = load("experiments/vgai_camera_quiet_gray.json")  # the gray recipe trained through noise up to 0.005
+quiet_joint = next(x for x in load("experiments/stage1_noise_joint.json")["recipes"].values() if "checkpoint_sha256" in x)
+quiet_limit = load("experiments/consensus_limit_quiet.json")["controllers"]["vgai_camera_quiet_gray"]["5s"]
 quiet_through = {float(s): r["5s"]["velocity_variance_median"] for x in s1_quiet for s, r in x["modular_pilot_noise"].items()}
 quiet_ok = max([s for s, var in quiet_through.items() if var <= FLOCKED_VARIANCE], default=0.0)
 quiet_bad = min(s for s, var in quiet_through.items() if var > FLOCKED_VARIANCE)
 noise_sentence = (("flocks" if does_mod(s1_quiet[0]) == "does" else "does not flock") + " as a modular pilot on clean frames"
                   + f" (variance at 5 s "
-                  f"{s1_quiet[0]['modular_pilot']['5s']['velocity_variance_median']:.1e} m²/s², the depth camera's "
-                  f"{s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}), "
+                  f"{s1_quiet[0]['modular_pilot']['5s']['velocity_variance_median']:.1e} m²/s²; the depth camera's, trained "
+                  f"through noise up to {s1_depth_noise:g}: {s1_depth['modular_pilot']['5s']['velocity_variance_median']:.1e}), "
                   + (f"through pixel noise of σ = {quiet_ok:g} too, " if quiet_ok > 0 else "")
                   + f"not through σ = {quiet_bad:g} ({quiet_through[quiet_bad]:.1e}), {10 / 255 / quiet_bad:.0f} times less than the "
                   "authors' 10/255; trained through noise drawn up to " + " or ".join(
@@ -310,8 +313,12 @@ items = [
        swap_word("gray + depth") != "flocks" else ". ")
     + f"Trained without sensor noise, its stage 1 {noise_sentence} (`stage1_noise.json`, `stage1_noise_floor.json`). "
     f"The whole recipe trained through noise drawn up to {quiet['train_config']['camera']['noise'][1]:g} "
-    f"(`vgai_camera_quiet_gray`), whose stage 1 flocks so, {does(quiet)} flock on clean frames ({quiet['episodes']} validation "
-    f"episodes: {quiet['relative_cost_mean']:.2f}, variance at 5 s {quiet['velocity_variance_median']['5s']:.1e} m²/s²). "
+    f"(`vgai_camera_quiet_gray`) {does(quiet)} flock on clean frames ({quiet['episodes']} validation "
+    f"episodes: {quiet['relative_cost_mean']:.2f}, variance at 5 s {quiet['velocity_variance_median']['5s']:.1e} m²/s²), "
+    f"though its CNN after the joint training, flown as a modular pilot, {('flocks' if does_mod(quiet_joint) == 'does' else 'does not')} "
+    f"({quiet_joint['modular_pilot']['5s']['velocity_variance_median']:.1e}; `stage1_noise_joint.json`): the VGAI itself brakes with "
+    f"γ = {quiet_limit['damping_gain_median']:.0f} /s and is pushed at rest with f = {quiet_limit['forcing_at_rest_rms_median']:.2f} "
+    "m/s² (`consensus_limit_quiet.json`; notebook 08 sets these beside the depth camera's VGAI). "
     "A camera-only VGAI that flocks at the authors' noise is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
