@@ -272,6 +272,8 @@ s1_depth_noise = load(f"experiments/{chosen_camera_runs()['gray + depth']}.json"
 quiet = load("experiments/vgai_camera_quiet_gray.json")  # the gray recipe trained through noise up to 0.005
 quiet_joint = next(x for x in load("experiments/stage1_noise_joint.json")["recipes"].values() if "checkpoint_sha256" in x)
 quiet_limit = load("experiments/consensus_limit_quiet.json")["controllers"]["vgai_camera_quiet_gray"]["5s"]
+quiet_mod_run = load("experiments/vgai_camera_quiet_gray_test_modular.json")["settings"]  # reported on the test episodes
+quiet_mod, quiet_mod_noisy = quiet_mod_run["clean"], next(x for k, x in quiet_mod_run.items() if k != "clean")
 quiet_through = {float(s): r["5s"]["velocity_variance_median"] for x in s1_quiet for s, r in x["modular_pilot_noise"].items()}
 quiet_ok = max([s for s, var in quiet_through.items() if var <= FLOCKED_VARIANCE], default=0.0)
 quiet_bad = min(s for s, var in quiet_through.items() if var > FLOCKED_VARIANCE)
@@ -318,8 +320,13 @@ items = [
     f"though its CNN after the joint training, flown as a modular pilot, {('flocks' if does_mod(quiet_joint) == 'does' else 'does not')} "
     f"({quiet_joint['modular_pilot']['5s']['velocity_variance_median']:.1e}; `stage1_noise_joint.json`): the VGAI itself brakes with "
     f"γ = {quiet_limit['damping_gain_median']:.0f} /s and is pushed at rest with f = {quiet_limit['forcing_at_rest_rms_median']:.2f} "
-    "m/s² (`consensus_limit_quiet.json`; notebook 08 sets these beside the depth camera's VGAI). "
-    "A camera-only VGAI that flocks at the authors' noise is an open problem.",
+    "m/s² (`consensus_limit_quiet.json`; notebook 08 sets these beside the depth camera's VGAI). That CNN with the DAGNN's "
+    f"MLP, a camera-only controller though not trained end to end, {'flocks' if quiet_mod['flocked'] else 'does not flock'} "
+    f"on clean frames of the {quiet_mod['episodes']} test episodes ({quiet_mod['relative_cost_mean']:.2f}, variance at 5 s "
+    f"{quiet_mod['velocity_variance_median']['5s']:.1e} m²/s², {'as safe as' if quiet_mod['safe'] else 'less safe than'} the "
+    f"expert; `vgai_camera_quiet_gray_test_modular.json`) and {'flocks' if quiet_mod_noisy['flocked'] else 'does not'} through "
+    f"10/255 ({quiet_mod_noisy['relative_cost_mean']:.2f}, variance {quiet_mod_noisy['velocity_variance_median']['5s']:.1e}). "
+    "A camera-only VGAI trained end to end that flocks, on clean frames or at the authors' noise, is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
     + verdict_at(1) + " (variance at 5 s " + ", ".join(f"{n_vgai[c]['velocity_variance_median']['5s']:.1e} m²/s² at N' = {c:g}"
