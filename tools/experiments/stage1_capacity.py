@@ -144,22 +144,35 @@ def main(argv=None) -> int:
              + (f", motion frame {args.noise_gap} steps old" if args.noise_gap is not None else "") + f" ({GAP_RECORD}, noise)",
              GAP_RECORD, {"noise_max": x, **({"motion_gap": args.noise_gap} if args.noise_gap is not None else {})})
             for x in args.noise_max]
+        def read(cnn, vision) -> dict:
+            """The CNN's correlation with the six features on the pilot's flights, at each of TIMES."""
+            q = estimator_quality(cnn, vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED, pilot=pilot)
+            return {str(t): [round(c, 3) for c in q[t]] for t in TIMES}
+
+        def fly(cnn, vision) -> dict:
+            """The CNN's modular pilot flown on clean frames and through each --pilot-noise sigma."""
+            return {"modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, vision), cfg, args.flights),
+                    "modular_pilot_noise": {f"{x:g}": damping_and_forcing(VisionDAGNN(dagnn, cnn, vision, noise=x), cfg, args.flights)
+                                            for x in args.pilot_noise}}
+
+        def report(label: str, row: dict) -> None:
+            m = row["modular_pilot"]["5s"]
+            print(label, {int(t): [round(x, 2) for x in c[2:4]] for t, c in row["correlation"].items()}, f"modular pilot at 5 s: variance "
+                  f"{m['velocity_variance_median']:.2e}, gamma {m['damping_gain_median']:.2f}, f {m['forcing_at_rest_rms_median']:.3f}",
+                  flush=True)
+            for x, res in row["modular_pilot_noise"].items():
+                print(f"  ... through sensor noise of sigma {x}: variance {res['5s']['velocity_variance_median']:.2e}, "
+                      f"gamma {res['5s']['damping_gain_median']:.2f}, f {res['5s']['forcing_at_rest_rms_median']:.3f}", flush=True)
+
         for name in args.trained:  # a finished training's CNN, after stages 2 and 3
             path = DATA_DIR / "experiments" / f"{name}.pt"
             trained = load_controller(path)
-            cnn, vision = trained.model.cnn.eval(), trained.vision
-            q = estimator_quality(cnn, vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED, pilot=pilot)
-            out["recipes"][f"{name}, after its joint training"] = {
-                "record": name, "checkpoint_sha256": sha256(path), "motion_gap": vision.motion_gap,
-                "view_width": vision.render.view_width, "channels": list(vision.render.channels),
-                "correlation": {str(t): [round(c, 3) for c in q[t]] for t in TIMES},
-                "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, vision), cfg, args.flights),
-                "modular_pilot_noise": {f"{x:g}": damping_and_forcing(VisionDAGNN(dagnn, cnn, vision, noise=x), cfg, args.flights)
-                                        for x in args.pilot_noise}}
-            m = out["recipes"][f"{name}, after its joint training"]["modular_pilot"]["5s"]
-            print(name, "after its joint training: modular pilot at 5 s: variance "
-                  f"{m['velocity_variance_median']:.2e}, gamma {m['damping_gain_median']:.2f}, f {m['forcing_at_rest_rms_median']:.3f}",
-                  flush=True)
+            vision = trained.vision
+            label = f"{name}, after its joint training"
+            out["recipes"][label] = {"record": name, "checkpoint_sha256": sha256(path), "motion_gap": vision.motion_gap,
+                                     "view_width": vision.render.view_width, "channels": list(vision.render.channels),
+                                     "correlation": read(trained.model.cnn.eval(), vision), **fly(trained.model.cnn, vision)}
+            report(label, out["recipes"][label])
         for label, record, change in recipes:
             tcfg = VGAITrainConfig.from_dict(json.loads((DATA_DIR / "experiments" / f"{record}.json").read_text())["train_config"])
             if "motion_gap" in change:
@@ -177,8 +190,7 @@ def main(argv=None) -> int:
             was_cached = stage1_file(STAGE1_CACHE, cfg, tcfg).is_file()
             start = time.perf_counter()
             cnn, rec = stage_one(cfg, tcfg)
-            q = estimator_quality(cnn, tcfg.vision, cfg, episodes=args.episodes, times=TIMES, seed=VALIDATION_SEED,
-                                  pilot=pilot)
+            correlation = read(cnn, tcfg.vision)
             out["recipes"][label] = {
                 "record": record, "motion_gap": tcfg.vision.motion_gap, "motion_mode": tcfg.vision.motion_mode, "motion_scale": tcfg.vision.motion_scale, "view_width": tcfg.vision.render.view_width, "cnn_widths": list(tcfg.cnn_widths), "channels": list(tcfg.vision.render.channels),
                 "seed": tcfg.seed, "warm_steps": tcfg.warm_steps, "camera_noise": list(tcfg.camera.noise) if tcfg.camera else None, "stage1_file": stage1_file(STAGE1_CACHE, cfg, tcfg).name,
@@ -189,17 +201,8 @@ def main(argv=None) -> int:
                 "loss_every_1000_steps": [round(sum(rec["warm_loss"][k - 100:k]) / 100, 4)  # mean of the 100 steps before step k
                                           for k in range(1000, len(rec["warm_loss"]) + 1, 1000)],
                 "seconds_here": round(time.perf_counter() - start, 1),
-                "correlation": {str(t): [round(c, 3) for c in q[t]] for t in TIMES},
-                "modular_pilot": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision), cfg, args.flights),
-                "modular_pilot_noise": {f"{x:g}": damping_and_forcing(VisionDAGNN(dagnn, cnn, tcfg.vision, noise=x), cfg, args.flights)
-                                        for x in args.pilot_noise}}
-            m = out["recipes"][label]["modular_pilot"]["5s"]
-            print(label, {t: [round(c, 2) for c in q[t][2:4]] for t in TIMES}, f"modular pilot at 5 s: variance "
-                  f"{m['velocity_variance_median']:.2e}, gamma {m['damping_gain_median']:.2f}, f {m['forcing_at_rest_rms_median']:.3f}",
-                  flush=True)
-            for x, res in out["recipes"][label]["modular_pilot_noise"].items():
-                print(f"  ... through sensor noise of sigma {x}: variance {res['5s']['velocity_variance_median']:.2e}, "
-                      f"gamma {res['5s']['damping_gain_median']:.2f}, f {res['5s']['forcing_at_rest_rms_median']:.3f}", flush=True)
+                "correlation": correlation, **fly(cnn, tcfg.vision)}
+            report(label, out["recipes"][label])
     out["provenance"] = prov.record(seed=VALIDATION_SEED, episodes=args.episodes,
                                     checkpoints={f"data/{args.pilot}.pt": sha256(DATA_DIR / f"{args.pilot}.pt"),
                                                  "data/dagnn/dagnn_K4.pt": sha256(dagnn_path)})
