@@ -557,3 +557,74 @@ def test_with_feature_means_the_cnn_learns_to_read_the_means_in_stage_one_and_in
     _, x_sums = estimation_batch(cfg, MINI, r, v, torch.Generator().manual_seed(1))
     assert x.shape == x_sums.shape and not torch.allclose(x, x_sums)
     assert torch.all((x * x_sums) >= -1e-9)  # a mean has its sum's sign
+
+
+def test_with_the_local_readout_the_mlp_reads_the_cnns_estimate_of_the_six_local_features(tmp_path):
+    """readout "local": x_i(t) is the aux head's estimate of the 6 local features in their units (what the DAGNN's
+    MLP reads exactly), in the controller, in stage 2's rows and in stage 3's loss; the file keeps it."""
+    torch.manual_seed(0)
+    C, H, W = VISION.image_shape()
+    cnn = VisualCNN(C, H, W, 12, (4, 8), 16)
+    cnn.aux_mean.copy_(torch.linspace(-1, 1, 6)), cnn.aux_std.copy_(torch.linspace(0.5, 3, 6))
+    model = VGAIModel(cnn, AggregationMLP(3, 6, (16,)), readout="local").eval()
+    images = torch.rand(2, CFG.N, C, H, W)
+    torch.testing.assert_close(model.features(images), cnn.estimate_local_features(images.flatten(0, 1)).view(2, CFG.N, 6))
+    c = VGAIController(model, CFG, VISION)
+    c2 = load_controller(save_controller(tmp_path / "v.pt", c))
+    assert c2.model.readout == "local" and c2.model.cnn.F == 12 and c2.model.mlp.F == 6
+    r, v = sample_initial_state(CFG.replace(T=6), 2, torch.Generator().manual_seed(0))
+    torch.testing.assert_close(rollout(c2, CFG.replace(T=6), r, v).u, rollout(c, CFG.replace(T=6), r, v).u)
+    # the action loss reaches the CNN through the aux head, and only the aux head's 6 outputs matter
+    M, K = 2, 3
+    imgs, S = torch.rand(M, K, CFG.N, C, H, W), torch.rand(M, K, CFG.N, CFG.N)
+    loss = bptt_loss(model, imgs, S, torch.randn(M, CFG.N, 2))
+    loss.backward()
+    assert cnn.aux.weight.grad.abs().sum() > 0 and cnn.stem.weight.grad.abs().sum() > 0
+
+
+def test_a_readout_and_an_mlp_that_do_not_fit_are_refused():
+    C, H, W = VISION.image_shape()
+    cnn = VisualCNN(C, H, W, 12, (4, 8), 16)
+    with pytest.raises(ValueError, match="F=12 features per tap but the CNN gives F=6"):
+        VGAIModel(cnn, AggregationMLP(3, 12, (16,)), readout="local")
+    with pytest.raises(ValueError, match="readout 'estimates'"):
+        VGAIModel(cnn, AggregationMLP(3, 6, (16,)), readout="estimates")
+    with pytest.raises(ValueError, match="readout one of"):
+        VGAITrainConfig(readout="estimates")
+    assert VGAITrainConfig(readout="local", F=12).new_model().mlp.F == 6
+
+
+def test_a_miniature_training_with_the_local_readout_fits_the_mlp_on_six_estimates_per_tap(tmp_path):
+    cfg, tcfg = FlockConfig(N=12, T=20), dataclasses.replace(MINI, readout="local", F=12)
+    ctrl, hist = train_vgai(cfg, tcfg, checkpoint=tmp_path / "v.pt", progress=False, check_episodes=1)
+    assert ctrl.model.cnn.F == 12 and ctrl.model.mlp.F == 6 and ctrl.model.mlp.z_mean.shape[-1] == 6 * tcfg.K
+    loaded = load_controller(tmp_path / "v.pt")
+    assert VGAITrainConfig.from_dict(loaded.meta["train_config"]).readout == "local" and loaded.model.readout == "local"
+
+
+def test_a_training_that_starts_its_mlp_as_a_dagnns_takes_its_weights_and_refuses_one_that_reads_otherwise(tmp_path):
+    """mlp_start: stage 2 copies the DAGNN's MLP (weights and normalisation) instead of fitting one, and a DAGNN whose
+    taps, widths, GSO or features differ from what the VGAI's MLP reads is refused before anything is trained."""
+    from vgai_lite.learned_controllers import DAGNNController
+    from vgai_lite.vgai_training import mlp_from_dagnn
+    torch.manual_seed(3)
+    dagnn = AggregationMLP(3, 6, (8,))
+    dagnn.set_normalization(torch.randn(50, 3, 6) * 2 + 1)
+    path = save_controller(tmp_path / "d.pt", DAGNNController(dagnn, CFG))
+    tcfg = dataclasses.replace(MINI, readout="local", F=12, mlp_start=str(path))
+    model = tcfg.new_model()
+    assert mlp_from_dagnn(model, tcfg) == []
+    for k, t in dagnn.state_dict().items():
+        torch.testing.assert_close(model.mlp.state_dict()[k], t)
+    with pytest.raises(ValueError, match="expected a DAGNN of"):
+        mlp_from_dagnn(model, dataclasses.replace(tcfg, hidden=(16,)))
+    with pytest.raises(ValueError, match="feature_means.*True\)"):
+        mlp_from_dagnn(model, dataclasses.replace(tcfg, feature_means=True))
+    path2 = save_controller(tmp_path / "d2.pt", DAGNNController(dagnn, CFG, feature_transform="signed_log"))
+    with pytest.raises(ValueError, match="'signed_log'"):
+        mlp_from_dagnn(model, dataclasses.replace(tcfg, mlp_start=str(path2)))
+    with pytest.raises(ValueError, match="needs readout 'local'"):
+        VGAITrainConfig(mlp_start=str(path))
+    cfg = FlockConfig(N=12, T=20)
+    ctrl, hist = train_vgai(cfg, tcfg, progress=False, check_episodes=1)
+    assert hist["mlp_loss"] == [] and len(hist["joint_loss"]) == 2

@@ -20,7 +20,8 @@ per idea; data flow one way: a module imports only modules listed before it here
                      what both trainings share), ``dagnn_training``, ``vgai_config`` (what defines a
                      VGAI run), ``vgai_training`` (VGAI's training top to bottom: state estimation,
                      the MLP, K-step BPTT), ``state_estimation`` (stage 1 run alone, notebook 05)
-  pictures           ``viz``, ``diagrams`` (the 3-D flight player is in the lab)
+  pictures           ``viz`` (the paper's figures 1 and 3, ``lab.diagrams``, and the 3-D flight player
+                     are in the lab)
 
 The reproduction and the book's tooling live in ``vgai_lite.lab`` (the paper's tables, the shipped
 models by name, the robustness sweep, Ray, exercises and grading, the website, benchmarks, records);

@@ -121,7 +121,8 @@ def load_controller(path: Union[str, Path], cfg: Optional[FlockConfig] = None, d
         controller = DAGNNController(model.to(device).eval(), cfg or stored_cfg, spec["gso"],
                                      spec["feature_transform"])
     elif kind == "vgai":
-        model = VGAIModel(cnn_from_spec(spec["cnn"], spec["F"]), AggregationMLP(spec["K"], spec["F"], spec["hidden"]))
+        model = VGAIModel(cnn_from_spec(spec["cnn"], spec["cnn"].get("F", spec["F"])),
+                          AggregationMLP(spec["K"], spec["F"], spec["hidden"]), spec.get("readout", "features"))
         load_weights(model, payload["state_dict"], path)
         controller = VGAIController(model.to(device).eval(), cfg or stored_cfg,
                                     VisionConfig.from_dict(spec["vision"]), spec["gso"])

@@ -175,7 +175,7 @@ class VGAIController(_Learned):
         """What ``load_controller`` needs to rebuild this controller (plain values only)."""
         cnn, mlp = self.model.cnn, self.model.mlp
         return {"kind": "vgai", "K": mlp.K, "F": mlp.F, "hidden": list(mlp.hidden), "gso": self.gso_kind,
-                "cnn": cnn.spec(),
+                "cnn": {**cnn.spec(), "F": cnn.F}, "readout": self.model.readout,
                 "vision": self.vision.to_dict()}
 
     def __repr__(self) -> str:

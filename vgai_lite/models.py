@@ -222,21 +222,31 @@ def cnn_from_spec(spec: dict, F: int) -> VisualCNN:
                       spec.get("motion_features", 0), spec.get("pairing", "difference"), spec.get("motion_scale", 5.0))
 
 
+READOUTS = ("features", "local")  # what NN_Theta reads of each image: ``VGAIModel.read``
+
+
 class VGAIModel(nn.Module):
     """The two learned parts of VGAI, trained jointly: CNN_Psi and NN_Theta.
 
-    ``features`` is every agent's x_i(t) = CNN_Psi(H_i(t)); between the two networks sits the delayed
-    aggregation Z(t) (eq. 6), step by step in the controller and unrolled over a window in training,
-    and ``mlp`` maps Z(t) to the action (eqs. 7-8).
+    ``features`` is every agent's x_i(t) = CNN_Psi(H_i(t)) as the MLP reads it (``read``); between the two
+    networks sits the delayed aggregation Z(t) (eq. 6), step by step in the controller and unrolled over a
+    window in training, and ``mlp`` maps Z(t) to the action (eqs. 7-8).
     """
 
-    def __init__(self, cnn: VisualCNN, mlp: AggregationMLP):
+    def __init__(self, cnn: VisualCNN, mlp: AggregationMLP, readout: str = "features"):
         super().__init__()
-        if mlp.F != cnn.F:
-            raise ValueError(f"the MLP expects F={mlp.F} features per tap but the CNN gives F={cnn.F}")
-        self.cnn, self.mlp = cnn, mlp
+        width = {"features": cnn.F, "local": N_LOCAL_FEATURES}.get(readout)
+        if mlp.F != width:
+            raise ValueError(f"the MLP expects F={mlp.F} features per tap but the CNN gives F={width} "
+                             f"(readout {readout!r}, one of {READOUTS})")
+        self.cnn, self.mlp, self.readout = cnn, mlp, readout
+
+    def read(self, X: torch.Tensor) -> torch.Tensor:
+        """What NN_Theta reads of the CNN's features X (..., F): X ("features"), or the aux head's estimate of
+        the 6 local features in their units ("local"), what the DAGNN's MLP reads exactly."""
+        return X if self.readout == "features" else self.cnn.aux_standardized(X) * self.cnn.aux_std + self.cnn.aux_mean
 
     def features(self, images: torch.Tensor) -> torch.Tensor:
-        """X = CNN_Psi(H) for every agent: images (..., N, C, H, W) -> (..., N, F)."""
+        """x_i(t) as the MLP reads it, for every agent: images (..., N, C, H, W) -> (..., N, mlp.F)."""
         lead = images.shape[:-3]
-        return self.cnn(images.reshape(-1, *images.shape[-3:])).view(*lead, self.cnn.F)
+        return self.read(self.cnn(images.reshape(-1, *images.shape[-3:]))).view(*lead, self.mlp.F)

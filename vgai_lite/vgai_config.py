@@ -19,7 +19,8 @@ from .camera import CameraRanges
 from .config import config_dict
 from .graphs import DEFAULT_GSO
 from .imitation import check_flight_mix
-from .models import AggregationMLP, VGAIModel, visual_cnn
+from .features import N_LOCAL_FEATURES
+from .models import READOUTS, AggregationMLP, VGAIModel, visual_cnn
 from .render import RenderConfig
 from .vision import VisionConfig
 
@@ -90,6 +91,10 @@ class VGAITrainConfig:
         feature_means: the local features the CNN learns to read (stage 1, and stage 3's state-estimation
             loss) are the local features' sums divided by the number of neighbours (``local_features(per_neighbour=True)``):
             means, which do not grow with the team's density (False: the sums, the DAGNN's).
+        readout: what NN_Theta reads of each image (``VGAIModel.read``): "features" (the paper's: the CNN's F features)
+            or "local" (the aux head's estimate of the 6 local features, in their units: what the DAGNN's MLP reads).
+        mlp_start: stage 2: "fit" (the MLP fitted on the frozen CNN's features), or a DAGNN's file or shipped name
+            (e.g. "dagnn_K4", notebook 04) whose MLP NN_Theta starts as (needs readout "local"; ``mlp_from_dagnn``).
     """
 
     F: int = 24
@@ -101,7 +106,7 @@ class VGAITrainConfig:
     vision: VisionConfig = PAPER_VISION
     warm_starts: bool = False
     LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True, "teams": [], "radii": [], "group_swarms": 8,
-                                     "feature_means": False}
+                                     "feature_means": False, "readout": "features", "mlp_start": "fit"}
     """Fields added after files were written, with the value every file written before them had (until
     2026-12-04 every VGAI training warm-started; until 2026-12-06 none drew N or R)."""
     expert_episodes: int = 40
@@ -129,6 +134,8 @@ class VGAITrainConfig:
     radii: tuple = ()
     group_swarms: int = 8
     feature_means: bool = False
+    readout: str = "features"
+    mlp_start: str = "fit"
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
@@ -147,9 +154,11 @@ class VGAITrainConfig:
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"VGAITrainConfig: {name} is a probability, in [0, 1]; got {getattr(self, name)!r}")
         check_flight_mix("VGAITrainConfig", self.teams, self.radii, self.group_swarms)
-        if not isinstance(self.warm_starts, bool) or not isinstance(self.feature_means, bool):
-            raise ValueError(f"VGAITrainConfig: warm_starts and feature_means must be True or False, "
-                             f"got {self.warm_starts!r}, {self.feature_means!r}")
+        if not isinstance(self.warm_starts, bool) or not isinstance(self.feature_means, bool) or self.readout not in READOUTS:
+            raise ValueError(f"VGAITrainConfig: warm_starts and feature_means must be True or False and readout one of "
+                             f"{READOUTS}, got {self.warm_starts!r}, {self.feature_means!r}, {self.readout!r}")
+        if self.mlp_start != "fit" and self.readout != "local":
+            raise ValueError(f"VGAITrainConfig: mlp_start {self.mlp_start!r} (a DAGNN's MLP) needs readout 'local'")
         if not self.lr > 0 or not self.aux_weight >= 0:
             raise ValueError(f"VGAITrainConfig: lr must be > 0 and aux_weight >= 0, got {self.lr!r}, {self.aux_weight!r}")
         lo, hi = self.synthetic_speeds
@@ -196,7 +205,8 @@ class VGAITrainConfig:
         C, H, W = self.vision.image_shape()
         return VGAIModel(visual_cnn(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features,
                                     self.vision.motion_mode, self.vision.motion_scale),
-                         AggregationMLP(self.K, self.F, self.hidden))
+                         AggregationMLP(self.K, N_LOCAL_FEATURES if self.readout == "local" else self.F, self.hidden),
+                         self.readout)
 
 
 LEGACY_FIELDS = VGAITrainConfig.LEGACY_FIELDS

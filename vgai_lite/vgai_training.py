@@ -35,7 +35,7 @@ from tqdm.auto import tqdm
 
 from .aggregation import aggregation_sequence
 from .camera import draw_camera
-from .checkpoints import save_controller
+from .checkpoints import load_controller, save_controller
 from .config import FlockConfig
 from .features import N_LOCAL_FEATURES, local_features
 from .flocking import sample_initial_state
@@ -179,6 +179,17 @@ def fit_mlp(model: VGAIModel, tcfg: VGAITrainConfig, flights: list, gen: torch.G
                   desc="stage 2: MLP on CNN features", progress=progress)
 
 
+def mlp_from_dagnn(model: VGAIModel, tcfg: VGAITrainConfig) -> list:
+    """Stage 2 with ``tcfg.mlp_start`` a DAGNN: NN_Theta starts as that DAGNN's MLP (weights and normalisation),
+    which reads exactly the 6 local features the "local" readout estimates. Returns no losses: nothing is fitted."""
+    d = load_controller(tcfg.mlp_start)
+    want, got = (tcfg.K, list(tcfg.hidden), tcfg.gso, "none", False), (d.K, list(d.model.hidden), d.gso_kind, d.feature_transform, tcfg.feature_means)
+    if want != got:
+        raise ValueError(f"{tcfg.mlp_start}: expected a DAGNN of (K, hidden, GSO, feature transform, feature_means) {want}, got {got}")
+    model.mlp.load_state_dict(d.model.state_dict())
+    return []
+
+
 @torch.no_grad()
 def mlp_rows(model: VGAIModel, flights: Flights, tcfg: VGAITrainConfig, gen: torch.Generator) -> tuple:
     """Stage 2's rows of one group of flights: Z (rows, K, F) from the frozen CNN and the expert's U* (rows, 2);
@@ -193,7 +204,7 @@ def mlp_rows(model: VGAIModel, flights: Flights, tcfg: VGAITrainConfig, gen: tor
     Z = aggregation_sequence(X.transpose(0, 1), S.transpose(0, 1), tcfg.K)  # (E, T, N, K, F)
     early = min(tcfg.early_steps, T)
     keep_t = torch.cat((torch.arange(early), torch.arange(early, T, tcfg.mlp_late_stride)))
-    return Z[:, keep_t].reshape(-1, tcfg.K, tcfg.F), u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
+    return Z[:, keep_t].reshape(-1, tcfg.K, model.mlp.F), u.transpose(0, 1)[:, keep_t].reshape(-1, 2)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -208,7 +219,7 @@ def bptt_loss(model, images: torch.Tensor, S: torch.Tensor, u_star: torch.Tensor
     S (M, K, N, N): the GSOs at those steps; u_star (M, N, 2): the expert's action at each window's
     last step; valid (M, K), optional: False at steps before the flight began, which contribute
     nothing (their X and S are 0). ``model`` has ``cnn`` (inputs (P, ...) -> features (P, F)) and
-    ``mlp`` (Z (M, N, K, F) -> actions (M, N, 2)).
+    ``mlp`` (Z (M, N, K, F) -> actions (M, N, 2)); a ``VGAIModel``'s ``read`` sits between them.
 
         X(tau) = CNN_Psi(H(tau))  at every step of the window,
         Z(t)   = [X(t), S(t) X(t-1), ..., S(t)...S(t-K+2) X(t-K+1)]   (eq. 6, unrolled),
@@ -218,7 +229,7 @@ def bptt_loss(model, images: torch.Tensor, S: torch.Tensor, u_star: torch.Tensor
     ``also(X)``, optional: a term of the same features X (M, K, N, F) added to the loss, so that the
     CNN runs once for both (the book's recipe adds stage 1's state-estimation loss, ``joint_loss``)."""
     X = window_features(model.cnn, images)
-    loss = window_action_loss(model.mlp, X, S, u_star, valid)
+    loss = window_action_loss(model.mlp, model.read(X) if isinstance(model, VGAIModel) else X, S, u_star, valid)
     return loss if also is None else loss + also(X)
 
 
@@ -370,7 +381,8 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
             with timed(seconds, "stage 1: state estimation"):
                 history.update(stage1(model.cnn, cfg, tcfg, store.groups(), gen, progress))
             with timed(seconds, "stage 2: the MLP on the CNN's features"):
-                history["mlp_loss"] = fit_mlp(model, tcfg, store.groups(), gen, progress)
+                history["mlp_loss"] = (fit_mlp(model, tcfg, store.groups(), gen, progress) if tcfg.mlp_start == "fit"
+                                       else mlp_from_dagnn(model, tcfg))
             check("after stages 1-2")
         else:
             history["joint_loss"] += joint_round(model, opt, cfg, tcfg, store, gen, progress=progress,

@@ -88,6 +88,10 @@ def main(argv=None) -> int:
                    help="width of the CNN's hidden FC layer (VGAITrainConfig.cnn_hidden; the book's: 64)")
     p.add_argument("--feature-means", action="store_true",
                    help="the CNN learns the local features as means over neighbours (VGAITrainConfig.feature_means)")
+    p.add_argument("--readout", choices=("features", "local"), default=None,
+                   help="what the MLP reads of each image: the CNN's F features, or its estimate of the 6 local features")
+    p.add_argument("--mlp-start", default=None, metavar="fit|DAGNN",
+                   help="stage 2: fit the MLP (default), or start it as this DAGNN's (a file or a shipped name; --readout local)")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
@@ -100,7 +104,8 @@ def main(argv=None) -> int:
     changes = {k: v for k, v in (("motion_features", args.motion_features), ("synthetic_share", args.synthetic_share),
                                  ("aux_weight", args.aux_weight), ("early_share", args.early_share),
                                  ("dagger_rounds", args.dagger_rounds), ("seed", args.seed),
-                                 ("learner_swarms", args.learner_swarms), ("cnn_hidden", args.cnn_hidden))
+                                 ("learner_swarms", args.learner_swarms), ("cnn_hidden", args.cnn_hidden),
+                                 ("readout", args.readout), ("mlp_start", args.mlp_start))
                if v is not None}
     if args.cnn_widths is not None:
         changes["cnn_widths"] = tuple(int(c) for c in args.cnn_widths.split(","))

@@ -22,12 +22,12 @@
 #
 # The CNN and the network are trained **together**, end to end, by **imitating the expert**
 # (with DAgger), backpropagating through the $K$ steps of delayed exchanges. The same pipeline as a
-# picture (drawn by `vgai_lite/diagrams.py`):
+# picture (drawn by `vgai_lite/lab/diagrams.py`):
 
 # %%
 import matplotlib.pyplot as plt
 
-from vgai_lite.diagrams import pipeline
+from vgai_lite.lab.diagrams import pipeline
 
 pipeline()
 plt.show()

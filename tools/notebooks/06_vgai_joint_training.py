@@ -59,10 +59,10 @@ print("quick mode" if QUICK else "full mode")
 # 4. run the MLP once, on $\mathbf Z(t)$, and take the L1 loss against the expert's $\mathbf U^*(t)$;
 # 5. backpropagate: through the MLP once and through the CNN $K$ times.
 #
-# The paper's figure 3, drawn for the default $K = 4$ (`vgai_lite/diagrams.py`):
+# The paper's figure 3, drawn for the default $K = 4$ (`vgai_lite/lab/diagrams.py`):
 
 # %%
-from vgai_lite.diagrams import bptt
+from vgai_lite.lab.diagrams import bptt
 
 bptt(K=4)
 plt.show()

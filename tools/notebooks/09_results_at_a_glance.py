@@ -272,6 +272,9 @@ s1_depth_noise = load(f"experiments/{chosen_camera_runs()['gray + depth']}.json"
 quiet = load("experiments/vgai_camera_quiet_gray.json")  # the gray recipe trained through noise up to 0.005
 quiet_joint = next(x for x in load("experiments/stage1_noise_joint.json")["recipes"].values() if "checkpoint_sha256" in x)
 quiet_limit = load("experiments/consensus_limit_quiet.json")["controllers"]["vgai_camera_quiet_gray"]["5s"]
+q_local, q_dagnn = load("experiments/vgai_camera_quiet_local.json"), load("experiments/vgai_camera_quiet_dagnn.json")
+q_local_limit, q_dagnn_limit = (load("experiments/consensus_limit_readout.json")["controllers"][k]["5s"]
+                                for k in ("vgai_camera_quiet_local", "vgai_camera_quiet_dagnn"))
 quiet_mod_run = load("experiments/vgai_camera_quiet_gray_test_modular.json")["settings"]  # reported on the test episodes
 quiet_mod, quiet_mod_noisy = quiet_mod_run["clean"], next(x for k, x in quiet_mod_run.items() if k != "clean")
 quiet_through = {float(s): r["5s"]["velocity_variance_median"] for x in s1_quiet for s, r in x["modular_pilot_noise"].items()}
@@ -326,6 +329,12 @@ items = [
     f"{quiet_mod['velocity_variance_median']['5s']:.1e} m²/s², {'as safe as' if quiet_mod['safe'] else 'less safe than'} the "
     f"expert; `vgai_camera_quiet_gray_test_modular.json`) and {'flocks' if quiet_mod_noisy['flocked'] else 'does not'} through "
     f"10/255 ({quiet_mod_noisy['relative_cost_mean']:.2f}, variance {quiet_mod_noisy['velocity_variance_median']['5s']:.1e}). "
+    + f"With its MLP reading the CNN's estimate of the six local features instead of its {quiet['train_config']['F']} features "
+    f"(`vgai_camera_quiet_local`) the VGAI {does(q_local)} flock ({q_local['relative_cost_mean']:.2f}, variance at 5 s "
+    f"{q_local['velocity_variance_median']['5s']:.1e} m²/s², γ = {q_local_limit['damping_gain_median']:.0f} /s, f = "
+    f"{q_local_limit['forcing_at_rest_rms_median']:.2f} m/s²); started as the DAGNN's MLP (`vgai_camera_quiet_dagnn`) it "
+    f"{does(q_dagnn)} flock ({q_dagnn['relative_cost_mean']:.2f}, {q_dagnn['velocity_variance_median']['5s']:.1e}, f = "
+    f"{q_dagnn_limit['forcing_at_rest_rms_median']:.2f} m/s²; `consensus_limit_readout.json`, notebook 08). "
     "A camera-only VGAI trained end to end that flocks, on clean frames or at the authors' noise, is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "

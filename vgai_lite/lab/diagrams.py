@@ -9,7 +9,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 
-from .viz import PALETTE
+from ..viz import PALETTE
 
 BOX = {"vision": "#fde8cc", "comm": "#dbe8f6", "net": "#e3f1dc", "world": "#eeeeee", "loss": "#f8d7d7"}
 
