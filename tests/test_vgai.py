@@ -618,7 +618,7 @@ def test_a_training_that_starts_its_mlp_as_a_dagnns_takes_its_weights_and_refuse
         torch.testing.assert_close(model.mlp.state_dict()[k], t)
     with pytest.raises(ValueError, match="expected a DAGNN of"):
         mlp_from_dagnn(model, dataclasses.replace(tcfg, hidden=(16,)))
-    with pytest.raises(ValueError, match="feature_means.*True\)"):
+    with pytest.raises(ValueError, match=r"feature_means.*True\)"):
         mlp_from_dagnn(model, dataclasses.replace(tcfg, feature_means=True))
     path2 = save_controller(tmp_path / "d2.pt", DAGNNController(dagnn, CFG, feature_transform="signed_log"))
     with pytest.raises(ValueError, match="'signed_log'"):
@@ -628,3 +628,19 @@ def test_a_training_that_starts_its_mlp_as_a_dagnns_takes_its_weights_and_refuse
     cfg = FlockConfig(N=12, T=20)
     ctrl, hist = train_vgai(cfg, tcfg, progress=False, check_episodes=1)
     assert hist["mlp_loss"] == [] and len(hist["joint_loss"]) == 2
+
+
+def test_with_joint_mlp_off_stage_three_trains_the_cnn_through_the_mlp_stage_two_left(tmp_path):
+    from vgai_lite.learned_controllers import DAGNNController
+    torch.manual_seed(4)
+    dagnn = AggregationMLP(3, 6, (8,))
+    dagnn.set_normalization(torch.randn(50, 3, 6))
+    path = save_controller(tmp_path / "d.pt", DAGNNController(dagnn, CFG))
+    tcfg = dataclasses.replace(MINI, readout="local", F=12, mlp_start=str(path), joint_mlp=False)
+    ctrl, hist = train_vgai(FlockConfig(N=12, T=20), tcfg, progress=False, check_episodes=1)
+    for k, t in dagnn.state_dict().items():  # the MLP is the DAGNN's, untouched by stage 3
+        torch.testing.assert_close(ctrl.model.mlp.state_dict()[k], t)
+    fresh = tcfg.new_model()
+    assert len(hist["joint_loss"]) == 2 and not torch.equal(ctrl.model.cnn.stem.weight, fresh.cnn.stem.weight)
+    with pytest.raises(ValueError, match="needs warm_starts"):
+        VGAITrainConfig(joint_mlp=False)

@@ -95,6 +95,8 @@ class VGAITrainConfig:
             or "local" (the aux head's estimate of the 6 local features, in their units: what the DAGNN's MLP reads).
         mlp_start: stage 2: "fit" (the MLP fitted on the frozen CNN's features), or a DAGNN's file or shipped name
             (e.g. "dagnn_K4", notebook 04) whose MLP NN_Theta starts as (needs readout "local"; ``mlp_from_dagnn``).
+        joint_mlp: stage 3 trains NN_Theta with CNN_Psi (the paper's); False: only the CNN learns there, through the MLP
+            that stage 2 left (needs warm_starts), so that the action loss of eq. 10 reaches the CNN but not the MLP.
     """
 
     F: int = 24
@@ -106,7 +108,8 @@ class VGAITrainConfig:
     vision: VisionConfig = PAPER_VISION
     warm_starts: bool = False
     LEGACY_FIELDS: ClassVar[dict] = {"warm_starts": True, "teams": [], "radii": [], "group_swarms": 8,
-                                     "feature_means": False, "readout": "features", "mlp_start": "fit"}
+                                     "feature_means": False, "readout": "features", "mlp_start": "fit",
+                                     "joint_mlp": True}
     """Fields added after files were written, with the value every file written before them had (until
     2026-12-04 every VGAI training warm-started; until 2026-12-06 none drew N or R)."""
     expert_episodes: int = 40
@@ -136,6 +139,7 @@ class VGAITrainConfig:
     feature_means: bool = False
     readout: str = "features"
     mlp_start: str = "fit"
+    joint_mlp: bool = True
 
     def __post_init__(self) -> None:
         if self.motion_features is None:  # frozen dataclass: resolve the default once, here
@@ -157,6 +161,8 @@ class VGAITrainConfig:
         if not isinstance(self.warm_starts, bool) or not isinstance(self.feature_means, bool) or self.readout not in READOUTS:
             raise ValueError(f"VGAITrainConfig: warm_starts and feature_means must be True or False and readout one of "
                              f"{READOUTS}, got {self.warm_starts!r}, {self.feature_means!r}, {self.readout!r}")
+        if not isinstance(self.joint_mlp, bool) or not (self.joint_mlp or self.warm_starts):
+            raise ValueError(f"VGAITrainConfig: joint_mlp is True or False, and False needs warm_starts; got {self.joint_mlp!r}")
         if self.mlp_start != "fit" and self.readout != "local":
             raise ValueError(f"VGAITrainConfig: mlp_start {self.mlp_start!r} (a DAGNN's MLP) needs readout 'local'")
         if not self.lr > 0 or not self.aux_weight >= 0:

@@ -376,7 +376,7 @@ def train_vgai(cfg: FlockConfig, tcfg: VGAITrainConfig = VGAITrainConfig(),
         with timed(seconds, "round 0: the expert's flights"):
             for flight, swarms in flight_groups(cfg, tcfg, tcfg.expert_episodes, gen):
                 store.fly(None, flight, *sample_initial_state(flight, swarms, gen), 0.0, gen)
-        opt = torch.optim.Adam(model.parameters(), lr=tcfg.lr)
+        opt = torch.optim.Adam(model.parameters() if tcfg.joint_mlp else model.cnn.parameters(), lr=tcfg.lr)
         if tcfg.warm_starts:
             with timed(seconds, "stage 1: state estimation"):
                 history.update(stage1(model.cnn, cfg, tcfg, store.groups(), gen, progress))

@@ -92,6 +92,8 @@ def main(argv=None) -> int:
                    help="what the MLP reads of each image: the CNN's F features, or its estimate of the 6 local features")
     p.add_argument("--mlp-start", default=None, metavar="fit|DAGNN",
                    help="stage 2: fit the MLP (default), or start it as this DAGNN's (a file or a shipped name; --readout local)")
+    p.add_argument("--joint-mlp", choices=("on", "off"), default=None,
+                   help="off: stage 3 trains the CNN only, through the MLP stage 2 left")
     p.add_argument("--episodes", type=int, default=20, help="validation episodes of the evaluation")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--evaluate", default=None, metavar="CKPT", help="no training: evaluate this checkpoint")
@@ -111,6 +113,8 @@ def main(argv=None) -> int:
         changes["cnn_widths"] = tuple(int(c) for c in args.cnn_widths.split(","))
     if args.warm_starts is not None:
         changes["warm_starts"] = args.warm_starts == "on"
+    if args.joint_mlp is not None:
+        changes["joint_mlp"] = args.joint_mlp == "on"
     if args.feature_means:
         changes["feature_means"] = True
     if args.teams is not None:

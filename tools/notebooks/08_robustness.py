@@ -1356,7 +1356,9 @@ for run in mod_eval.values():
 # - the MLP reads the CNN's estimate of the six local features (its aux head, in their units) instead of
 #   the 24 features (`VGAITrainConfig.readout` "local"; stage 2 fits it on those estimates as before);
 # - the same, and stage 2 starts the MLP as the DAGNN's (`mlp_start` "dagnn_K4") instead of fitting it:
-#   the VGAI begins as the modular pilot, and stage 3 then trains both networks end to end as in every recipe.
+#   the VGAI begins as the modular pilot, and stage 3 then trains both networks end to end as in every recipe;
+# - the same, and stage 3 trains the CNN only (`joint_mlp` False): eq. 10's action loss reaches the CNN
+#   through the DAGNN's MLP, which stays as it is.
 #
 # Each is flown on clean frames of the validation episodes, measured as in the consensus table (γ, f on the
 # working episodes), and its CNN after the joint training flown as a modular pilot (the DAGNN's MLP on its
@@ -1365,18 +1367,21 @@ for run in mod_eval.values():
 # %%
 readout_names = {"vgai_camera_quiet_gray": ("the CNN's 24 features", "fitted"),
                  "vgai_camera_quiet_local": ("its estimate of the 6 local features", "fitted"),
-                 "vgai_camera_quiet_dagnn": ("its estimate of the 6 local features", "the DAGNN's MLP")}
+                 "vgai_camera_quiet_dagnn": ("its estimate of the 6 local features", "the DAGNN's MLP"),
+                 "vgai_camera_quiet_fixed_mlp": ("its estimate of the 6 local features", "the DAGNN's MLP, kept in stage 3")}
 readout_recs = {k: json.loads((exp_dir / f"{k}.json").read_text()) for k in readout_names}
 readout_limit_run = json.loads((exp_dir / "consensus_limit_readout.json").read_text())
-readout_limit = {"vgai_camera_quiet_gray": quiet_limit, **{k: x["5s"] for k, x in readout_limit_run["controllers"].items()}}
+fixed_limit_run = json.loads((exp_dir / "consensus_limit_fixed_mlp.json").read_text())
+readout_limit = {"vgai_camera_quiet_gray": quiet_limit, **{k: x["5s"] for run in (readout_limit_run, fixed_limit_run)
+                                                            for k, x in run["controllers"].items()}}
 readout_joint_run = json.loads((exp_dir / "stage1_noise_joint_readout.json").read_text())
 readout_joint = {"vgai_camera_quiet_gray": quiet_joint,
                  **{x["record"]: x for x in readout_joint_run["recipes"].values() if "checkpoint_sha256" in x}}
-assert set(readout_limit) == set(readout_joint) == set(readout_names)
+assert set(readout_limit) == set(readout_joint) | {"vgai_camera_quiet_fixed_mlp"} == set(readout_names)
 for k, rec in readout_recs.items():
     assert rec["train_config"].get("readout", "features") == ("features" if k == "vgai_camera_quiet_gray" else "local")
-    assert {kk: v for kk, v in rec["train_config"].items() if kk not in ("readout", "mlp_start")} == \
-        {kk: v for kk, v in quiet_rec["train_config"].items() if kk not in ("readout", "mlp_start")}, "one change at a time"
+    assert {kk: v for kk, v in rec["train_config"].items() if kk not in ("readout", "mlp_start", "joint_mlp")} == \
+        {kk: v for kk, v in quiet_rec["train_config"].items() if kk not in ("readout", "mlp_start", "joint_mlp")}, "one change at a time"
 display(Markdown(
     "| the MLP reads | stage 2 | trained [min] | relative cost (95% interval) | variance at 5 s [m²/s²] | connected at 5 s | "
     "flocked | as safe as the expert | γ [/s] (95% interval) | f [m/s²] (95% interval) | its CNN as a modular pilot |\n"
@@ -1387,17 +1392,24 @@ display(Markdown(
         f"{'yes' if flocked(readout_recs[k]) else 'no'} | {'yes' if as_safe_as_expert(readout_recs[k]) else 'no'} | "
         f"{readout_limit[k]['damping_gain_median']:.1f} ({ci(readout_limit[k], 'damping_gain')}) | "
         f"{readout_limit[k]['forcing_at_rest_rms_median']:.2f} ({ci(readout_limit[k], 'forcing_at_rest_rms')}) | "
-        f"{'flocks' if flock_at(readout_joint[k]['modular_pilot']) else 'does not flock'} "
-        f"({variance_text(mod(readout_joint[k])['velocity_variance_median'])}, f = {mod(readout_joint[k])['forcing_at_rest_rms_median']:.2f}) |"
+        + (f"{'flocks' if flock_at(readout_joint[k]['modular_pilot']) else 'does not flock'} "
+           f"({variance_text(mod(readout_joint[k])['velocity_variance_median'])}, f = {mod(readout_joint[k])['forcing_at_rest_rms_median']:.2f}) |"
+           if k in readout_joint else "the VGAI is one (its MLP is the DAGNN's) |")
         for k, (reads, start) in readout_names.items())))
 loc, dag = readout_limit["vgai_camera_quiet_local"], readout_limit["vgai_camera_quiet_dagnn"]
+fix, fix_rec = readout_limit["vgai_camera_quiet_fixed_mlp"], readout_recs["vgai_camera_quiet_fixed_mlp"]
 pilots_flock = all(flock_at(x["modular_pilot"]) for x in readout_joint.values())
 display(prose(
     "Reading the six estimates, the VGAI brakes {lb} the 24 features' VGAI (γ = {lg:.1f} against {qg:.1f} /s) and its "
     "variance at 5 s falls from {qv} to {lv} m²/s², {lflock}. Its forcing at rest is {lf_side} the 24 features' VGAI's "
     "(f = {lf:.2f} against {qf:.2f} m/s²), where the depth camera's VGAI has {df:.3f}. Started as the DAGNN's MLP, the VGAI begins as the "
     "modular pilot and the joint training takes it to f = {gf:.2f} m/s² and a variance of {gv} m²/s² ({gflock}). "
-    "{pilots}{so} One training seed each.",
+    "{pilots}{so} With the DAGNN's MLP kept through stage 3 and only the CNN learning end to end, the VGAI {fflock} "
+    "({fc:.2f}, variance at 5 s {fv} m²/s², connected in {fk:.0%}, f = {ff:.2f} m/s², γ = {fg:.1f} /s; {fsafe}). One training seed each.",
+    fflock="flocks" if flocked(fix_rec) else "does not flock", fc=fix_rec["relative_cost_mean"],
+    fv=variance_text(fix_rec["velocity_variance_median"]["5s"]), fk=fix_rec["share_connected_at_end"],
+    ff=fix["forcing_at_rest_rms_median"], fg=fix["damping_gain_median"],
+    fsafe="as safe as the expert" if as_safe_as_expert(fix_rec) else "less safe than the expert",
     lb=side(loc["damping_gain_median_ci95"], quiet_limit["damping_gain_median_ci95"], ("harder than", "as hard as", "more weakly than")),
     lg=loc["damping_gain_median"], qg=quiet_limit["damping_gain_median"],
     qv=variance_text(quiet_rec["velocity_variance_median"]["5s"]),
@@ -1416,9 +1428,24 @@ display(prose(
         "book's rule on the intervals)." if pilots_flock and not flocked(readout_recs["vgai_camera_quiet_dagnn"]) and side(
             dag["forcing_at_rest_rms_median_ci95"], mod(readout_joint["vgai_camera_quiet_dagnn"])["forcing_at_rest_rms_median_ci95"],
             (True, False, False)) else "")))
+fix_test_run = json.loads((exp_dir / "vgai_camera_quiet_fixed_mlp_test_cameras.json").read_text())["settings"]
+noisy_key = next(k for k in fix_test_run if k != "clean")  # "noise0.03922": the authors' 10/255
+fix_test, fix_noisy = fix_test_run["clean"], fix_test_run[noisy_key]
+assert fix_test["seed"] == TEST_SEED and flocked(fix_rec), "the test episodes report only what flocked on validation"
+display(prose("It is the one of these that flocks on the validation episodes, so it alone is flown on the {n} test episodes, to "
+              "report: on clean frames it {fc} at a relative cost of {c:.2f} ({lo:.2f}-{hi:.2f}), variance at 5 s {v} m²/s², "
+              "connected in {k:.0%}, {safe}; through σ = {s} it {fn} ({cn:.2f}, variance {vn} m²/s², connected in {kn:.0%}).",
+              n=fix_test["episodes"], fc="flocks" if fix_test["flocked"] else "does not flock", c=fix_test["relative_cost_mean"],
+              lo=fix_test["relative_cost_mean_ci95"][0], hi=fix_test["relative_cost_mean_ci95"][1],
+              v=variance_text(fix_test["velocity_variance_median"]["5s"]), k=fix_test["share_connected_at_end"],
+              safe="as safe as the expert" if fix_test["safe"] else "less safe than the expert",
+              s=sigma_label(float(noisy_key.removeprefix("noise"))), fn="flocks" if fix_noisy["flocked"] else "does not flock",
+              cn=fix_noisy["relative_cost_mean"], vn=variance_text(fix_noisy["velocity_variance_median"]["5s"]),
+              kn=fix_noisy["share_connected_at_end"]))
 for k in readout_names:
     print(f"{k} trained by:", readout_recs[k]["command"].split(" --note")[0])
-print("γ and f by:", readout_limit_run["command"])
+print("flown on the test episodes by:", fix_test["provenance"]["command"])
+print("γ and f by:", readout_limit_run["command"], "and", fixed_limit_run["command"])
 print("their CNNs read and flown by:", readout_joint_run["command"])
 
 # %% [markdown]

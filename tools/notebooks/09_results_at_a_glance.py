@@ -273,6 +273,10 @@ quiet = load("experiments/vgai_camera_quiet_gray.json")  # the gray recipe train
 quiet_joint = next(x for x in load("experiments/stage1_noise_joint.json")["recipes"].values() if "checkpoint_sha256" in x)
 quiet_limit = load("experiments/consensus_limit_quiet.json")["controllers"]["vgai_camera_quiet_gray"]["5s"]
 q_local, q_dagnn = load("experiments/vgai_camera_quiet_local.json"), load("experiments/vgai_camera_quiet_dagnn.json")
+q_fixed = load("experiments/vgai_camera_quiet_fixed_mlp.json")
+q_fixed_limit = load("experiments/consensus_limit_fixed_mlp.json")["controllers"]["vgai_camera_quiet_fixed_mlp"]["5s"]
+q_fixed_run = load("experiments/vgai_camera_quiet_fixed_mlp_test_cameras.json")["settings"]  # reported on the test episodes
+q_fixed_test, q_fixed_noisy = q_fixed_run["clean"], next(x for k, x in q_fixed_run.items() if k != "clean")
 q_local_limit, q_dagnn_limit = (load("experiments/consensus_limit_readout.json")["controllers"][k]["5s"]
                                 for k in ("vgai_camera_quiet_local", "vgai_camera_quiet_dagnn"))
 quiet_mod_run = load("experiments/vgai_camera_quiet_gray_test_modular.json")["settings"]  # reported on the test episodes
@@ -334,7 +338,17 @@ items = [
     f"{q_local['velocity_variance_median']['5s']:.1e} m²/s², γ = {q_local_limit['damping_gain_median']:.0f} /s, f = "
     f"{q_local_limit['forcing_at_rest_rms_median']:.2f} m/s²); started as the DAGNN's MLP (`vgai_camera_quiet_dagnn`) it "
     f"{does(q_dagnn)} flock ({q_dagnn['relative_cost_mean']:.2f}, {q_dagnn['velocity_variance_median']['5s']:.1e}, f = "
-    f"{q_dagnn_limit['forcing_at_rest_rms_median']:.2f} m/s²; `consensus_limit_readout.json`, notebook 08). "
+    f"{q_dagnn_limit['forcing_at_rest_rms_median']:.2f} m/s²; `consensus_limit_readout.json`, notebook 08)"
+    + (", its MLP having learned in the joint training a push at rest that the DAGNN's does not give" if not flocked(q_dagnn)
+       and q_dagnn_limit["forcing_at_rest_rms_median"] > q_fixed_limit["forcing_at_rest_rms_median"] else "")
+    + "; with the DAGNN's MLP kept through stage 3 and "
+    f"only the CNN learning end to end (`vgai_camera_quiet_fixed_mlp`) it {does(q_fixed)} flock ({q_fixed['relative_cost_mean']:.2f}, "
+    f"{q_fixed['velocity_variance_median']['5s']:.1e} m²/s², connected in {q_fixed['share_connected_at_end']:.0%} of the validation "
+    f"episodes); reported on the {q_fixed_test['episodes']} test episodes it {'flocks' if q_fixed_test['flocked'] else 'does not flock'} "
+    f"on clean frames ({q_fixed_test['relative_cost_mean']:.2f}, {q_fixed_test['velocity_variance_median']['5s']:.1e} m²/s², "
+    f"{'as safe as' if q_fixed_test['safe'] else 'less safe than'} the expert) and {'flocks' if q_fixed_noisy['flocked'] else 'does not'} "
+    f"through 10/255 ({q_fixed_noisy['relative_cost_mean']:.2f}, {q_fixed_noisy['velocity_variance_median']['5s']:.1e}; "
+    "`vgai_camera_quiet_fixed_mlp_test_cameras.json`): its MLP, though, is the DAGNN's, not learned from the images. "
     "A camera-only VGAI trained end to end that flocks, on clean frames or at the authors' noise, is an open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
