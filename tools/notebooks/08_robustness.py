@@ -1351,24 +1351,27 @@ for run in mod_eval.values():
 
 # %% [markdown]
 # **An MLP that reads what the DAGNN's reads.** The modular pilot flocks where the VGAI does not, with the
-# same CNN: the difference is the MLP, which in the VGAI reads the CNN's 24 learned features. Two trainings of
-# the quiet recipe, each one change further, ask whether it is what the MLP reads or where it starts:
-# - the MLP reads the CNN's estimate of the six local features (its aux head, in their units) instead of
-#   the 24 features (`VGAITrainConfig.readout` "local"; stage 2 fits it on those estimates as before);
+# same CNN: the difference is the MLP, which in the VGAI reads the CNN's 24 learned features. Three trainings
+# of the quiet recipe (the one above, through σ ≤ 0.005), each one change further, ask whether it is what the MLP
+# reads, where it starts, or what stage 3 does to it:
+# - the MLP reads the CNN's estimate of the six local features (its linear warm-start head of notebook 05, in
+#   the features' units) instead of the 24 features (`VGAITrainConfig.readout` "local"; stage 2 fits it on
+#   those estimates as before);
 # - the same, and stage 2 starts the MLP as the DAGNN's (`mlp_start` "dagnn_K4") instead of fitting it:
 #   the VGAI begins as the modular pilot, and stage 3 then trains both networks end to end as in every recipe;
 # - the same, and stage 3 trains the CNN only (`joint_mlp` False): eq. 10's action loss reaches the CNN
-#   through the DAGNN's MLP, which stays as it is.
+#   through the DAGNN's MLP, which stays as it is (the state-estimation loss as before).
 #
 # Each is flown on clean frames of the validation episodes, measured as in the consensus table (γ, f on the
 # working episodes), and its CNN after the joint training flown as a modular pilot (the DAGNN's MLP on its
-# estimates), as above. The commands are printed below.
+# estimates), as above (the third is one already); the one that flocks is then flown on the test episodes,
+# to report. The commands are printed below.
 
 # %%
-readout_names = {"vgai_camera_quiet_gray": ("the CNN's 24 features", "fitted"),
-                 "vgai_camera_quiet_local": ("its estimate of the 6 local features", "fitted"),
-                 "vgai_camera_quiet_dagnn": ("its estimate of the 6 local features", "the DAGNN's MLP"),
-                 "vgai_camera_quiet_fixed_mlp": ("its estimate of the 6 local features", "the DAGNN's MLP, kept in stage 3")}
+readout_names = {"vgai_camera_quiet_gray": ("the CNN's 24 features", "fitted / yes"),
+                 "vgai_camera_quiet_local": ("its estimate of the 6 local features", "fitted / yes"),
+                 "vgai_camera_quiet_dagnn": ("its estimate of the 6 local features", "the DAGNN's / yes"),
+                 "vgai_camera_quiet_fixed_mlp": ("its estimate of the 6 local features", "the DAGNN's / no")}
 readout_recs = {k: json.loads((exp_dir / f"{k}.json").read_text()) for k in readout_names}
 readout_limit_run = json.loads((exp_dir / "consensus_limit_readout.json").read_text())
 fixed_limit_run = json.loads((exp_dir / "consensus_limit_fixed_mlp.json").read_text())
@@ -1383,7 +1386,7 @@ for k, rec in readout_recs.items():
     assert {kk: v for kk, v in rec["train_config"].items() if kk not in ("readout", "mlp_start", "joint_mlp")} == \
         {kk: v for kk, v in quiet_rec["train_config"].items() if kk not in ("readout", "mlp_start", "joint_mlp")}, "one change at a time"
 display(Markdown(
-    "| the MLP reads | stage 2 | trained [min] | relative cost (95% interval) | variance at 5 s [m²/s²] | connected at 5 s | "
+    "| the MLP reads | the MLP starts as (stage 2) / learns in stage 3 | trained [min] | relative cost (95% interval) | variance at 5 s [m²/s²] | connected at 5 s | "
     "flocked | as safe as the expert | γ [/s] (95% interval) | f [m/s²] (95% interval) | its CNN as a modular pilot |\n"
     "|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(
         f"| {reads} | {start} | {readout_recs[k]['train_seconds'] / 60:.0f} | {readout_recs[k]['relative_cost_mean']:.2f} "
@@ -1395,7 +1398,9 @@ display(Markdown(
         + (f"{'flocks' if flock_at(readout_joint[k]['modular_pilot']) else 'does not flock'} "
            f"({variance_text(mod(readout_joint[k])['velocity_variance_median'])}, f = {mod(readout_joint[k])['forcing_at_rest_rms_median']:.2f}) |"
            if k in readout_joint else "the VGAI is one (its MLP is the DAGNN's) |")
-        for k, (reads, start) in readout_names.items())))
+        for k, (reads, start) in readout_names.items())
+    + f"\n\nγ: damping gain, f: forcing at rest, at 5 s on the {readout_limit_run['episodes']} working episodes; intervals: "
+    f"bootstrap 95%; {quiet_rec['episodes']} validation episodes; the minutes leave out stage 1, read from the cache."))
 loc, dag = readout_limit["vgai_camera_quiet_local"], readout_limit["vgai_camera_quiet_dagnn"]
 fix, fix_rec = readout_limit["vgai_camera_quiet_fixed_mlp"], readout_recs["vgai_camera_quiet_fixed_mlp"]
 pilots_flock = all(flock_at(x["modular_pilot"]) for x in readout_joint.values())
@@ -1404,8 +1409,9 @@ display(prose(
     "variance at 5 s falls from {qv} to {lv} m²/s², {lflock}. Its forcing at rest is {lf_side} the 24 features' VGAI's "
     "(f = {lf:.2f} against {qf:.2f} m/s²), where the depth camera's VGAI has {df:.3f}. Started as the DAGNN's MLP, the VGAI begins as the "
     "modular pilot and the joint training takes it to f = {gf:.2f} m/s² and a variance of {gv} m²/s² ({gflock}). "
-    "{pilots}{so} With the DAGNN's MLP kept through stage 3 and only the CNN learning end to end, the VGAI {fflock} "
-    "({fc:.2f}, variance at 5 s {fv} m²/s², connected in {fk:.0%}, f = {ff:.2f} m/s², γ = {fg:.1f} /s; {fsafe}). One training seed each.",
+    "{pilots} With the DAGNN's MLP kept through stage 3 and only the CNN learning end to end, the VGAI {fflock} "
+    "({fc:.2f}, variance at 5 s {fv} m²/s², connected in {fk:.0%}, f = {ff:.2f} m/s², γ = {fg:.1f} /s; {fsafe}).{so} "
+    "One training seed each.",
     fflock="flocks" if flocked(fix_rec) else "does not flock", fc=fix_rec["relative_cost_mean"],
     fv=variance_text(fix_rec["velocity_variance_median"]["5s"]), fk=fix_rec["share_connected_at_end"],
     ff=fix["forcing_at_rest_rms_median"], fg=fix["damping_gain_median"],
@@ -1420,21 +1426,29 @@ display(prose(
     lf=loc["forcing_at_rest_rms_median"], qf=quiet_limit["forcing_at_rest_rms_median"], df=depth_limit["forcing_at_rest_rms_median"],
     gf=dag["forcing_at_rest_rms_median"], gv=variance_text(readout_recs["vgai_camera_quiet_dagnn"]["velocity_variance_median"]["5s"]),
     gflock="it flocks" if flocked(readout_recs["vgai_camera_quiet_dagnn"]) else "it does not flock",
-    pilots=("Every one of these CNNs, after the joint training, still flies a modular pilot that flocks with the DAGNN's MLP: "
-            "the reading survives, what the MLP does with it does not." if pilots_flock else
+    pilots=("Every one of these CNNs, after the joint training, still flies a modular pilot that flocks with the DAGNN's MLP "
+            f"(f = {min(mod(x)['forcing_at_rest_rms_median'] for x in readout_joint.values()):.2f}-"
+            f"{max(mod(x)['forcing_at_rest_rms_median'] for x in readout_joint.values()):.2f} m/s²): the reading survives, and the "
+            f"MLPs that learn in stage 3 push at rest (f = {min(readout_limit[k]['forcing_at_rest_rms_median'] for k in readout_joint):.2f}-"
+            f"{max(readout_limit[k]['forcing_at_rest_rms_median'] for k in readout_joint):.2f} m/s²)." if pilots_flock else
             "Not every CNN after the joint training flies a modular pilot that flocks: the table says which."),
-    so=(" So the forcing at rest that keeps the gray VGAI from flocking sits in its MLP, not in what its CNN reads: an MLP "
-        "that starts as the DAGNN's learns it in the joint training (its f above its own CNN's modular pilot's, by the "
-        "book's rule on the intervals)." if pilots_flock and not flocked(readout_recs["vgai_camera_quiet_dagnn"]) and side(
-            dag["forcing_at_rest_rms_median_ci95"], mod(readout_joint["vgai_camera_quiet_dagnn"])["forcing_at_rest_rms_median_ci95"],
-            (True, False, False)) else "")))
+    so=(f" So the push at rest that keeps the gray VGAI from flocking is learned mostly by its MLP in stage 3: the same "
+        f"start gives f = {dag['forcing_at_rest_rms_median']:.2f} m/s² when the MLP learns and {fix['forcing_at_rest_rms_median']:.2f} "
+        "when it is kept (intervals apart, the book's rule); what is left is still above the depth camera's VGAI's."
+        if pilots_flock and flocked(fix_rec) and not flocked(readout_recs["vgai_camera_quiet_dagnn"])
+        and side(dag["forcing_at_rest_rms_median_ci95"], fix["forcing_at_rest_rms_median_ci95"], (True, False, False))
+        and fix["forcing_at_rest_rms_median_ci95"][0] > depth_limit["forcing_at_rest_rms_median_ci95"][1] else "")))
 fix_test_run = json.loads((exp_dir / "vgai_camera_quiet_fixed_mlp_test_cameras.json").read_text())["settings"]
 noisy_key = next(k for k in fix_test_run if k != "clean")  # "noise0.03922": the authors' 10/255
 fix_test, fix_noisy = fix_test_run["clean"], fix_test_run[noisy_key]
 assert fix_test["seed"] == TEST_SEED and flocked(fix_rec), "the test episodes report only what flocked on validation"
 display(prose("It is the one of these that flocks on the validation episodes, so it alone is flown on the {n} test episodes, to "
               "report: on clean frames it {fc} at a relative cost of {c:.2f} ({lo:.2f}-{hi:.2f}), variance at 5 s {v} m²/s², "
-              "connected in {k:.0%}, {safe}; through σ = {s} it {fn} ({cn:.2f}, variance {vn} m²/s², connected in {kn:.0%}).",
+              "connected in {k:.0%}, {safe}; through σ = {s} it {fn} ({cn:.2f}, variance {vn} m²/s², connected in {kn:.0%}). "
+              "On clean frames the issue's camera-only target (flocked, relative cost ≤ 2.0) is {met}, by a VGAI whose "
+              "MLP is the DAGNN's, not learned from images: the book records it so, and a gray VGAI whose MLP is learned end "
+              "to end too stays the open problem.",
+              met="met" if fix_test["flocked"] and fix_test["relative_cost_mean"] <= 2.0 else "missed",
               n=fix_test["episodes"], fc="flocks" if fix_test["flocked"] else "does not flock", c=fix_test["relative_cost_mean"],
               lo=fix_test["relative_cost_mean_ci95"][0], hi=fix_test["relative_cost_mean_ci95"][1],
               v=variance_text(fix_test["velocity_variance_median"]["5s"]), k=fix_test["share_connected_at_end"],

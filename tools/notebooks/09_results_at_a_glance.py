@@ -334,12 +334,14 @@ items = [
     f"expert; `vgai_camera_quiet_gray_test_modular.json`) and {'flocks' if quiet_mod_noisy['flocked'] else 'does not'} through "
     f"10/255 ({quiet_mod_noisy['relative_cost_mean']:.2f}, variance {quiet_mod_noisy['velocity_variance_median']['5s']:.1e}). "
     + f"With its MLP reading the CNN's estimate of the six local features instead of its {quiet['train_config']['F']} features "
-    f"(`vgai_camera_quiet_local`) the VGAI {does(q_local)} flock ({q_local['relative_cost_mean']:.2f}, variance at 5 s "
+    f"(`vgai_camera_quiet_local`) the VGAI {does(q_local)} flock ({q_local['episodes']} validation episodes: relative cost "
+    f"{q_local['relative_cost_mean']:.2f}, variance at 5 s "
     f"{q_local['velocity_variance_median']['5s']:.1e} m²/s², γ = {q_local_limit['damping_gain_median']:.0f} /s, f = "
     f"{q_local_limit['forcing_at_rest_rms_median']:.2f} m/s²); started as the DAGNN's MLP (`vgai_camera_quiet_dagnn`) it "
     f"{does(q_dagnn)} flock ({q_dagnn['relative_cost_mean']:.2f}, {q_dagnn['velocity_variance_median']['5s']:.1e}, f = "
     f"{q_dagnn_limit['forcing_at_rest_rms_median']:.2f} m/s²; `consensus_limit_readout.json`, notebook 08)"
-    + (", its MLP having learned in the joint training a push at rest that the DAGNN's does not give" if not flocked(q_dagnn)
+    + (f", its MLP having learned in the joint training a push at rest (f = {q_dagnn_limit['forcing_at_rest_rms_median']:.2f} "
+       f"against {q_fixed_limit['forcing_at_rest_rms_median']:.2f} m/s² with the DAGNN's MLP kept)" if not flocked(q_dagnn)
        and q_dagnn_limit["forcing_at_rest_rms_median"] > q_fixed_limit["forcing_at_rest_rms_median"] else "")
     + "; with the DAGNN's MLP kept through stage 3 and "
     f"only the CNN learning end to end (`vgai_camera_quiet_fixed_mlp`) it {does(q_fixed)} flock ({q_fixed['relative_cost_mean']:.2f}, "
@@ -349,7 +351,8 @@ items = [
     f"{'as safe as' if q_fixed_test['safe'] else 'less safe than'} the expert) and {'flocks' if q_fixed_noisy['flocked'] else 'does not'} "
     f"through 10/255 ({q_fixed_noisy['relative_cost_mean']:.2f}, {q_fixed_noisy['velocity_variance_median']['5s']:.1e}; "
     "`vgai_camera_quiet_fixed_mlp_test_cameras.json`): its MLP, though, is the DAGNN's, not learned from the images. "
-    "A camera-only VGAI trained end to end that flocks, on clean frames or at the authors' noise, is an open problem.",
+    "A camera-only VGAI whose MLP too is learned end to end and that flocks, on clean frames or at the authors' noise, is an "
+    "open problem.",
     "* **Larger teams.** Trained on 50 drones (one training, judged against the spread of the recipe's own seeds at "
     "N = 50, `findings.flock_verdict`), VGAI flocks when flown by N' = " + verdict_at(-1) + "; it does not by N' = "
     + verdict_at(1) + " (variance at 5 s " + ", ".join(f"{n_vgai[c]['velocity_variance_median']['5s']:.1e} m²/s² at N' = {c:g}"
