@@ -225,6 +225,11 @@ def cnn_from_spec(spec: dict, F: int) -> VisualCNN:
 READOUTS = ("features", "local")  # what NN_Theta reads of each image: ``VGAIModel.read``
 
 
+def read_width(readout: str, F: int):
+    """Features per tap NN_Theta reads under ``readout`` from a CNN of F features (None for an unknown readout)."""
+    return {"features": F, "local": N_LOCAL_FEATURES}.get(readout)
+
+
 class VGAIModel(nn.Module):
     """The two learned parts of VGAI, trained jointly: CNN_Psi and NN_Theta.
 
@@ -235,7 +240,7 @@ class VGAIModel(nn.Module):
 
     def __init__(self, cnn: VisualCNN, mlp: AggregationMLP, readout: str = "features"):
         super().__init__()
-        width = {"features": cnn.F, "local": N_LOCAL_FEATURES}.get(readout)
+        width = read_width(readout, cnn.F)
         if mlp.F != width:
             raise ValueError(f"the MLP expects F={mlp.F} features per tap but the CNN gives F={width} "
                              f"(readout {readout!r}, one of {READOUTS})")

@@ -19,8 +19,7 @@ from .camera import CameraRanges
 from .config import config_dict
 from .graphs import DEFAULT_GSO
 from .imitation import check_flight_mix
-from .features import N_LOCAL_FEATURES
-from .models import READOUTS, AggregationMLP, VGAIModel, visual_cnn
+from .models import READOUTS, AggregationMLP, VGAIModel, read_width, visual_cnn
 from .render import RenderConfig
 from .vision import VisionConfig
 
@@ -211,7 +210,7 @@ class VGAITrainConfig:
         C, H, W = self.vision.image_shape()
         return VGAIModel(visual_cnn(C, H, W, self.F, self.cnn_widths, self.cnn_hidden, self.motion_features,
                                     self.vision.motion_mode, self.vision.motion_scale),
-                         AggregationMLP(self.K, N_LOCAL_FEATURES if self.readout == "local" else self.F, self.hidden),
+                         AggregationMLP(self.K, read_width(self.readout, self.F), self.hidden),
                          self.readout)
 
 
