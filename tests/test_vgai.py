@@ -618,8 +618,13 @@ def test_a_training_that_starts_its_mlp_as_a_dagnns_takes_its_weights_and_refuse
         torch.testing.assert_close(model.mlp.state_dict()[k], t)
     with pytest.raises(ValueError, match="expected a DAGNN of"):
         mlp_from_dagnn(model, dataclasses.replace(tcfg, hidden=(16,)))
-    with pytest.raises(ValueError, match=r"feature_means.*True\)"):
-        mlp_from_dagnn(model, dataclasses.replace(tcfg, feature_means=True))
+    with pytest.raises(ValueError, match=r"'per_neighbour'\), got .*'none'\)"):
+        mlp_from_dagnn(model, dataclasses.replace(tcfg, feature_means=True))  # the CNN reads means, the DAGNN sums
+    path3 = save_controller(tmp_path / "d3.pt", DAGNNController(dagnn, CFG, feature_transform="per_neighbour"))
+    means = dataclasses.replace(tcfg, feature_means=True, mlp_start=str(path3))
+    assert mlp_from_dagnn(model, means) == []
+    with pytest.raises(ValueError, match=r"'none'\), got .*'per_neighbour'\)"):
+        mlp_from_dagnn(model, dataclasses.replace(tcfg, mlp_start=str(path3)))  # the CNN reads sums, the DAGNN means
     path2 = save_controller(tmp_path / "d2.pt", DAGNNController(dagnn, CFG, feature_transform="signed_log"))
     with pytest.raises(ValueError, match="'signed_log'"):
         mlp_from_dagnn(model, dataclasses.replace(tcfg, mlp_start=str(path2)))

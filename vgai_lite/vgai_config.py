@@ -93,7 +93,8 @@ class VGAITrainConfig:
         readout: what NN_Theta reads of each image (``VGAIModel.read``): "features" (the paper's: the CNN's F features)
             or "local" (the aux head's estimate of the 6 local features, in their units: what the DAGNN's MLP reads).
         mlp_start: stage 2: "fit" (the MLP fitted on the frozen CNN's features), or a DAGNN's file or shipped name
-            (e.g. "dagnn_K4", notebook 04) whose MLP NN_Theta starts as (needs readout "local"; ``mlp_from_dagnn``).
+            (e.g. "dagnn_K4", notebook 04) whose MLP NN_Theta starts as (needs readout "local"; ``mlp_from_dagnn``); with
+            ``feature_means`` a DAGNN that reads the features per neighbour (e.g. "dagnn_K4_per_neighbour", notebook 03).
         joint_mlp: stage 3 trains NN_Theta with CNN_Psi (the paper's); False: only the CNN learns there, through the MLP
             that stage 2 left (needs warm_starts), so that the action loss of eq. 10 reaches the CNN but not the MLP.
     """

@@ -180,12 +180,12 @@ def fit_mlp(model: VGAIModel, tcfg: VGAITrainConfig, flights: list, gen: torch.G
 
 
 def mlp_from_dagnn(model: VGAIModel, tcfg: VGAITrainConfig) -> list:
-    """Stage 2 with ``tcfg.mlp_start`` a DAGNN: NN_Theta starts as that DAGNN's MLP (weights and normalisation),
-    which reads exactly the 6 local features the "local" readout estimates. Returns no losses: nothing is fitted."""
-    d = load_controller(tcfg.mlp_start)
-    want, got = (tcfg.K, list(tcfg.hidden), tcfg.gso, "none", False), (d.K, list(d.model.hidden), d.gso_kind, d.feature_transform, tcfg.feature_means)
+    """Stage 2 with ``tcfg.mlp_start`` a DAGNN: NN_Theta starts as that DAGNN's MLP (weights and normalisation), which reads
+    the 6 local features the "local" readout estimates (sums; with ``feature_means``, a "per_neighbour" DAGNN's means). Fits nothing: []."""
+    d, reads = load_controller(tcfg.mlp_start), "per_neighbour" if tcfg.feature_means else "none"
+    want, got = (tcfg.K, list(tcfg.hidden), tcfg.gso, reads), (d.K, list(d.model.hidden), d.gso_kind, d.feature_transform)
     if want != got:
-        raise ValueError(f"{tcfg.mlp_start}: expected a DAGNN of (K, hidden, GSO, feature transform, feature_means) {want}, got {got}")
+        raise ValueError(f"{tcfg.mlp_start}: expected a DAGNN of (K, hidden, GSO, feature transform) {want}, got {got}")
     model.mlp.load_state_dict(d.model.state_dict())
     return []
 
