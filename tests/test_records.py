@@ -166,3 +166,18 @@ def test_every_committed_table_cell_names_a_checkpoint_the_repository_holds():
         if ck is not None and (Path(ck).is_absolute() or not (DATA_DIR.parent / ck).exists()):
             missing.append((path.name, ck))
     assert not missing, f"cells whose checkpoint is not a repository file: {missing[:5]}"
+
+
+def test_a_checkpoint_evaluated_again_keeps_its_changes_only_when_the_flags_give_its_recipe():
+    """vgai_variant.py --evaluate with change flags records them as the record's changes; flags that leave one of the
+    checkpoint's changes out (or add one it was not trained with) are refused, naming the fields, before anything flies."""
+    sys.path.insert(0, str(ROOT / "tools" / "experiments"))
+    import vgai_variant
+
+    ckpt = DATA_DIR / "experiments" / "vgai_camera_quiet_fixed_mlp.pt"
+    gray = ["--camera", "0,0.005:0,1.4:0.9,1.1:-0.03,0.03:0.05", "--channels", "gray", "--threads", str(torch.get_num_threads())]
+    with pytest.raises(SystemExit, match=r"differs from the recipe these flags give in \['joint_mlp', 'mlp_start', 'readout'\]"):
+        vgai_variant.main(["--name", "unused", "--evaluate", str(ckpt), *gray])
+    with pytest.raises(SystemExit, match=r"in \['feature_means'\]"):
+        vgai_variant.main(["--name", "unused", "--evaluate", str(ckpt), *gray, "--readout", "local", "--mlp-start", "dagnn_K4",
+                           "--joint-mlp", "off", "--feature-means"])

@@ -11,7 +11,8 @@ model), so a record and its controller can be checked against each other.
 
     python tools/experiments/vgai_variant.py --name vgai_F24_plain --evaluate data/experiments/vgai_F24_plain.pt
 
-writes the same record for a checkpoint trained before (its training time read from the checkpoint).
+writes the same record for a checkpoint trained before (its training time read from the checkpoint); given with
+the flags it was trained with, the record keeps them as its changes, and flags that give another recipe are refused.
 ``--note`` is stored in the record (e.g. that two trainings shared the two cores, so their
 training time is not the time of one alone).
 
@@ -154,7 +155,11 @@ def main(argv=None) -> int:
     with Provenance(command) as train_prov:
         if args.evaluate:
             controller = load_controller(ckpt)
-            hist, tcfg = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
+            hist, stored = controller.meta["history"], VGAITrainConfig.from_dict(controller.meta["train_config"])
+            if changes and stored.to_dict() != tcfg.to_dict():  # a record's changes must be the checkpoint's
+                diff = sorted(k for k, v in stored.to_dict().items() if tcfg.to_dict()[k] != v)
+                raise SystemExit(f"--evaluate {ckpt}: its training differs from the recipe these flags give in {diff}")
+            tcfg = stored
         else:
             controller, hist = train_vgai(cfg, tcfg, checkpoint=ckpt, progress=False,
                                           **({"stage1": cached(args.stage1_cache)} if args.stage1_cache else {}))

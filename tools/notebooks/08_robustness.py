@@ -1463,6 +1463,70 @@ print("γ and f by:", readout_limit_run["command"], "and", fixed_limit_run["comm
 print("their CNNs read and flown by:", readout_joint_run["command"])
 
 # %% [markdown]
+# **When does the MLP learn to push?** Two more trainings of the local-readout recipe (the second row above:
+# the MLP fitted in stage 2, then learning in stage 3), each one change from it:
+# - stopped after stages 1 and 2 (`dagger_rounds` 0): the MLP as fitted on the CNN's estimates, before any
+#   joint training;
+# - one guess at the cause: stage 3 ends three windows in four in the first 50 steps of a flight
+#   (`early_share` 0.75), where the expert's labels are large, so its MLP sees few states near rest, where the
+#   expert's action is about zero. Trained with `early_share` 0.25, three windows in four after the first 50
+#   steps (stage 1 is trained again: `early_share` also places its states).
+
+# %%
+from vgai_lite.vgai_config import VGAITrainConfig
+
+loc_rec = readout_recs["vgai_camera_quiet_local"]
+recipe_of = lambda rec: VGAITrainConfig.from_dict(rec["train_config"]).to_dict()  # records before a field: its default
+stage2_rec = json.loads((exp_dir / "vgai_camera_quiet_local_stage2.json").read_text())
+stage2_limit_run = json.loads((exp_dir / "consensus_limit_stage2_means.json").read_text())
+st2 = stage2_limit_run["controllers"]["vgai_camera_quiet_local_stage2"]["5s"]
+assert stage2_rec["train_config"]["dagger_rounds"] == 0 and \
+    {k: v for k, v in recipe_of(stage2_rec).items() if k != "dagger_rounds"} == \
+    {k: v for k, v in recipe_of(loc_rec).items() if k != "dagger_rounds"}, "one change: dagger_rounds"
+display(prose(
+    "Stopped after stage 2, the VGAI {s2flock} ({c2:.2f}, variance at 5 s {v2} m²/s², connected in {k2:.0%}): its MLP, fitted "
+    "on the CNN's estimates, does not brake (γ = {g2:.2f} /s) and pushes at rest with f = {f2:.2f} m/s² (the DAGNN's MLP on the "
+    "jointly trained CNNs above: {plo:.2f}-{phi:.2f}). The {rounds} rounds of stage 3 then teach it to brake (γ = {lg2:.1f} /s) and, with the "
+    "braking, a push at rest of {lf2:.2f} m/s²: {fside2} the stage-2 MLP's, by the book's rule.",
+    s2flock="flocks" if flocked(stage2_rec) else "does not flock", c2=stage2_rec["relative_cost_mean"],
+    v2=variance_text(stage2_rec["velocity_variance_median"]["5s"]), k2=stage2_rec["share_connected_at_end"],
+    g2=st2["damping_gain_median"], f2=st2["forcing_at_rest_rms_median"],
+    plo=min(mod(x)["forcing_at_rest_rms_median"] for x in readout_joint.values()),
+    phi=max(mod(x)["forcing_at_rest_rms_median"] for x in readout_joint.values()),
+    lg2=loc["damping_gain_median"], lf2=loc["forcing_at_rest_rms_median"], rounds=loc_rec["train_config"]["dagger_rounds"],
+    fside2=side(loc["forcing_at_rest_rms_median_ci95"], st2["forcing_at_rest_rms_median_ci95"], ("larger than", "as large as", "smaller than"))))
+print("stopped after stage 2 by:", stage2_rec["command"].split(" --note")[0])
+print("its γ and f by:", stage2_limit_run["command"])
+late_rec = json.loads((exp_dir / "vgai_camera_quiet_local_late.json").read_text())
+late_limit_run = json.loads((exp_dir / "consensus_limit_local_late.json").read_text())
+late = late_limit_run["controllers"]["vgai_camera_quiet_local_late"]["5s"]
+assert late_rec["train_config"]["early_share"] != loc_rec["train_config"]["early_share"] and \
+    {k: v for k, v in recipe_of(late_rec).items() if k != "early_share"} == \
+    {k: v for k, v in recipe_of(loc_rec).items() if k != "early_share"}, "one change: early_share"
+display(prose(
+    "With {ls:.0%} of its windows in the first {es_steps} steps the VGAI {lflock} ({lc:.2f} ({llo:.2f}-{lhi:.2f}), variance at 5 s "
+    "{lv} m²/s², connected in {lk:.0%}; {lsafe}); its cost is {cmp} the recipe's with {es:.0%} ({oc:.2f}; each interval "
+    "widened by the gray trainings' spread between seeds, {sp:.2f}). Its push at rest is {fside} the recipe's (f = {lf:.2f} "
+    "against {of:.2f} m/s², γ = {lg:.1f} against {og:.1f} /s): {so} One training seed.",
+    ls=late_rec["train_config"]["early_share"], es=loc_rec["train_config"]["early_share"],
+    es_steps=late_rec["train_config"]["early_steps"],
+    lflock="flocks" if flocked(late_rec) else "does not flock", lc=late_rec["relative_cost_mean"],
+    llo=late_rec["relative_cost_mean_ci95"][0], lhi=late_rec["relative_cost_mean_ci95"][1],
+    lv=variance_text(late_rec["velocity_variance_median"]["5s"]), lk=late_rec["share_connected_at_end"],
+    lsafe="as safe as the expert" if as_safe_as_expert(late_rec) else "less safe than the expert",
+    cmp={-1: "below", 0: "level with", 1: "above"}[compare(one_training(late_rec, spread), one_training(loc_rec, spread))],
+    oc=loc_rec["relative_cost_mean"], sp=spread,
+    fside=side(late["forcing_at_rest_rms_median_ci95"], loc["forcing_at_rest_rms_median_ci95"], ("larger than", "as large as", "smaller than")),
+    lf=late["forcing_at_rest_rms_median"], of=loc["forcing_at_rest_rms_median"],
+    lg=late["damping_gain_median"], og=loc["damping_gain_median"],
+    so=("more states near rest do not teach the MLP to stop pushing there." if not flocked(late_rec)
+        and late["forcing_at_rest_rms_median_ci95"][1] >= loc["forcing_at_rest_rms_median_ci95"][0]
+        else "more states near rest teach the MLP to push less there." if late["forcing_at_rest_rms_median_ci95"][1] < loc["forcing_at_rest_rms_median_ci95"][0]
+        else "the guess is not borne out.")))
+print("trained by:", late_rec["command"].split(" --note")[0])
+print("γ and f by:", late_limit_run["command"])
+
+# %% [markdown]
 # ## 7. Larger teams in a perturbed world
 #
 # Trained on 50 drones, flown by 100 and 200 with the perturbation at each target's size (pixel noise
