@@ -798,14 +798,27 @@ display(prose(
     verdicts=flocks_where([fixed_team[c] for c in team_cols], team_cols),
     c50=than("N=50", fixed_team, vb), f50=fixed_team["N=50"]["relative_cost_mean"], b50=vb["N=50"]["relative_cost_mean"]))
 gray_flocks = [c for c in team_cols if flocked(gray_team[c])]
+gray_r1_run = json.loads((DATA_DIR / "experiments" / "consensus_limit_R1_means.json").read_text())
+assert gray_r1_run["R"] == 1.0 and gray_r1_run["N"] == 50
+gray_r1 = gray_r1_run["controllers"]["vgai_camera_quiet_means_fixed_mlp"]["5s"]
+depth_r1 = gray_r1_run["controllers"]["vgai_depthcam_means_fixed_mlp"]["5s"]
 gray_noise = float(gray_noisy_key.removeprefix("noise"))
 display(prose(
     "Through the gray camera alone (no depth channel; sensor noise drawn from [{n0:g}, {n1:g}] in training, notebook 08's "
     "quiet gray camera), the same construction flocks at {where} and not at {nowhere}; against the depth camera's row its "
     "cost is {c50} at N = 50 ({g50:.2f} against {f50:.2f}), {c200} at N' = 200 ({g200:.2f} against {f200:.2f}) and {c1} "
     "at R = 1 m ({g1:.2f} against {f1:.2f}). Through sensor noise of σ = {s:.3f} (the authors' 10/255), at N = 50 on {e} "
-    "validation episodes, it {nflock} (relative cost {nc:.2f}, variance at 5 s {nv} m²/s², connected in {nk:.0%}). It trained in {mins:.0f} min "
-    "alone on the 2 cores, stage 1 ({s1:.0f} min) included.",
+    "validation episodes, it {nflock} (relative cost {nc:.2f}, variance at 5 s {nv} m²/s², connected in {nk:.0%}). At R = 1 m "
+    "(`consensus_limit.py --R 1.0`, {re} flights from the working episodes, at 5 s) it brakes with γ = {rg:.0f} /s "
+    "({rglo:.0f}-{rghi:.0f}) against f = {rf:.2f} m/s², and its variance, {rv} m²/s², is {rover:,.0f} times its balance "
+    "(f/γ)²: as for the book's recipe at that radius (below), what keeps its velocities apart is not a soft brake nor a "
+    "push at rest. The depth camera's row there: γ = {dg:.1f} /s, f = {df:.2f} m/s², variance {dv} m²/s². It trained in "
+    "{mins:.0f} min alone on the 2 cores, stage 1 ({s1:.0f} min) included.",
+    re=gray_r1_run["episodes"], rg=gray_r1["damping_gain_median"], rglo=gray_r1["damping_gain_median_ci95"][0],
+    rghi=gray_r1["damping_gain_median_ci95"][1], rf=gray_r1["forcing_at_rest_rms_median"],
+    rv=variance_text(gray_r1["velocity_variance_median"]),
+    rover=gray_r1["velocity_variance_median"] / gray_r1["balance_variance_median"],
+    dg=depth_r1["damping_gain_median"], df=depth_r1["forcing_at_rest_rms_median"], dv=variance_text(depth_r1["velocity_variance_median"]),
     n0=gray_rec["changes"]["camera"]["noise"][0], n1=gray_rec["changes"]["camera"]["noise"][1],
     where=", ".join(col_label(c) for c in gray_flocks) or "no column",
     nowhere=", ".join(col_label(c) for c in team_cols if c not in gray_flocks) or "none",
@@ -820,7 +833,7 @@ print("trained by:", re.sub(r" --evaluate \S+", "", fixed_rec["command"].split("
       "(its record: the same command with --evaluate and the checkpoint, which flies it again on the validation episodes)")
 print("flown by:", fixed_team_run["command"])
 print("the gray row trained by:", gray_rec["command"].split(" --note")[0])
-print("and flown by:", gray_team_run["command"], "and", gray_noisy["provenance"]["command"])
+print("and flown by:", gray_team_run["command"], "and", gray_noisy["provenance"]["command"], "and", gray_r1_run["command"])
 fixed_test_run = json.loads((DATA_DIR / "experiments" / "vgai_depthcam_means_fixed_mlp_teams_test.json").read_text())
 fixed_test = fixed_test_run["cells"]
 R1_VARIANCE_MARK = 1e-2  # the teams-and-radii issue's mark at R = 1 m: connected in FLOCKED_CONNECTED of episodes, variance at most this
