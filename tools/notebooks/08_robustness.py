@@ -1403,17 +1403,24 @@ display(Markdown(
     f"bootstrap 95%; {quiet_rec['episodes']} validation episodes; the minutes leave out stage 1, read from the cache."))
 loc, dag = readout_limit["vgai_camera_quiet_local"], readout_limit["vgai_camera_quiet_dagnn"]
 fix, fix_rec = readout_limit["vgai_camera_quiet_fixed_mlp"], readout_recs["vgai_camera_quiet_fixed_mlp"]
+
+
+def verdict_open(rec):
+    """'flocks (1.96, variance at 5 s ... m²/s², connected in 100%': a record's verdict and figures, the bracket left open."""
+    return (f"{'flocks' if flocked(rec) else 'does not flock'} ({rec['relative_cost_mean']:.2f}, variance at 5 s "
+            f"{variance_text(rec['velocity_variance_median']['5s'])} m²/s², connected in {rec['share_connected_at_end']:.0%}")
+
+
 pilots_flock = all(flock_at(x["modular_pilot"]) for x in readout_joint.values())
 display(prose(
     "Reading the six estimates, the VGAI brakes {lb} the 24 features' VGAI (γ = {lg:.1f} against {qg:.1f} /s) and its "
     "variance at 5 s falls from {qv} to {lv} m²/s², {lflock}. Its forcing at rest is {lf_side} the 24 features' VGAI's "
     "(f = {lf:.2f} against {qf:.2f} m/s²), where the depth camera's VGAI has {df:.3f}. Started as the DAGNN's MLP, the VGAI begins as the "
     "modular pilot and the joint training takes it to f = {gf:.2f} m/s² and a variance of {gv} m²/s² ({gflock}). "
-    "{pilots} With the DAGNN's MLP kept through stage 3 and only the CNN learning end to end, the VGAI {fflock} "
-    "({fc:.2f}, variance at 5 s {fv} m²/s², connected in {fk:.0%}, f = {ff:.2f} m/s², γ = {fg:.1f} /s; {fsafe}).{so} "
+    "{pilots} With the DAGNN's MLP kept through stage 3 and only the CNN learning end to end, the VGAI {fverdict}, "
+    "f = {ff:.2f} m/s², γ = {fg:.1f} /s; {fsafe}).{so} "
     "One training seed each.",
-    fflock="flocks" if flocked(fix_rec) else "does not flock", fc=fix_rec["relative_cost_mean"],
-    fv=variance_text(fix_rec["velocity_variance_median"]["5s"]), fk=fix_rec["share_connected_at_end"],
+    fverdict=verdict_open(fix_rec),
     ff=fix["forcing_at_rest_rms_median"], fg=fix["damping_gain_median"],
     fsafe="as safe as the expert" if as_safe_as_expert(fix_rec) else "less safe than the expert",
     lb=side(loc["damping_gain_median_ci95"], quiet_limit["damping_gain_median_ci95"], ("harder than", "as hard as", "more weakly than")),
@@ -1484,12 +1491,11 @@ assert stage2_rec["train_config"]["dagger_rounds"] == 0 and \
     {k: v for k, v in recipe_of(stage2_rec).items() if k != "dagger_rounds"} == \
     {k: v for k, v in recipe_of(loc_rec).items() if k != "dagger_rounds"}, "one change: dagger_rounds"
 display(prose(
-    "Stopped after stage 2, the VGAI {s2flock} ({c2:.2f}, variance at 5 s {v2} m²/s², connected in {k2:.0%}): its MLP, fitted "
+    "Stopped after stage 2, the VGAI {s2verdict}): its MLP, fitted "
     "on the CNN's estimates, does not brake (γ = {g2:.2f} /s) and pushes at rest with f = {f2:.2f} m/s² (the DAGNN's MLP on the "
     "jointly trained CNNs above: {plo:.2f}-{phi:.2f}). The {rounds} rounds of stage 3 then teach it to brake (γ = {lg2:.1f} /s) and, with the "
     "braking, a push at rest of {lf2:.2f} m/s²: {fside2} the stage-2 MLP's, by the book's rule.",
-    s2flock="flocks" if flocked(stage2_rec) else "does not flock", c2=stage2_rec["relative_cost_mean"],
-    v2=variance_text(stage2_rec["velocity_variance_median"]["5s"]), k2=stage2_rec["share_connected_at_end"],
+    s2verdict=verdict_open(stage2_rec),
     g2=st2["damping_gain_median"], f2=st2["forcing_at_rest_rms_median"],
     plo=min(mod(x)["forcing_at_rest_rms_median"] for x in readout_joint.values()),
     phi=max(mod(x)["forcing_at_rest_rms_median"] for x in readout_joint.values()),
